@@ -1,0 +1,56 @@
+"""thermerr_rs: machine-tool thermal error — models, compensation and physics diagnosis.
+
+The compute kernels are Rust (``thermerr_rs._core``); this package is a thin, typed API over
+them. See the README for the command line (``thermerr``).
+"""
+
+from __future__ import annotations
+
+from ._core import __version__
+from .base import FORMAT_VERSION, Estimator, load_model
+from .errors import (
+    ConvergenceError,
+    DataError,
+    MissingColumnError,
+    ModelFormatError,
+    NotFittedError,
+    NumericalError,
+    ParameterError,
+    ShapeError,
+    ThermerrError,
+)
+from .fcm import FuzzyCMeans
+from .linear import MLR
+from .metrics import Scores, scores
+from .preprocessing import AGORegressor, MinMaxAGO, spread_search
+from .rbf import RBFNetwork
+from .run import Run, read_run
+from .selection import SensorSelection, select_sensors
+
+__all__ = [
+    "__version__",
+    "FORMAT_VERSION",
+    "Estimator",
+    "load_model",
+    "Run",
+    "read_run",
+    "Scores",
+    "scores",
+    "MLR",
+    "FuzzyCMeans",
+    "SensorSelection",
+    "select_sensors",
+    "RBFNetwork",
+    "MinMaxAGO",
+    "AGORegressor",
+    "spread_search",
+    "ThermerrError",
+    "ParameterError",
+    "ShapeError",
+    "DataError",
+    "MissingColumnError",
+    "NumericalError",
+    "ConvergenceError",
+    "NotFittedError",
+    "ModelFormatError",
+]

@@ -1,0 +1,224 @@
+"""What every estimator shares: scikit-learn-style parameters, fitted attributes ending in
+``_``, and versioned JSON model files (never pickle)."""
+
+from __future__ import annotations
+
+import inspect
+import json
+import os
+from pathlib import Path
+from typing import Any, ClassVar, TypeVar
+
+import numpy as np
+
+from ._arrays import F64, as_matrix, as_vector
+from ._io import write_atomic
+from .errors import ModelFormatError, NotFittedError, ParameterError
+
+#: Schema version of the model files this library writes and reads.
+FORMAT_VERSION = 1
+
+_REGISTRY: dict[str, type[Estimator]] = {}
+
+E = TypeVar("E", bound="Estimator")
+
+
+class Estimator:
+    """Base class: subclasses declare ``kind`` and implement ``_fit``, ``_predict``,
+    ``_state`` and ``_restore``."""
+
+    kind: ClassVar[str] = ""
+    #: names of the columns the model was fitted on, when known (a run or a DataFrame)
+    feature_names_in_: list[str] | None = None
+    #: name of the target column (e.g. ``"E_z"``), when known
+    target_name_: str | None = None
+
+    def __init_subclass__(cls, **kw: Any) -> None:
+        super().__init_subclass__(**kw)
+        if cls.kind:
+            _REGISTRY[cls.kind] = cls
+
+    # -- parameters ---------------------------------------------------------------------
+    @classmethod
+    def _param_names(cls) -> list[str]:
+        sig = inspect.signature(cls.__init__)
+        return [p for p in sig.parameters if p != "self"]
+
+    def get_params(self, deep: bool = True) -> dict[str, Any]:
+        return {p: getattr(self, p) for p in self._param_names()}
+
+    def set_params(self: E, **params: Any) -> E:
+        valid = self._param_names()
+        for k, v in params.items():
+            if k not in valid:
+                raise ParameterError(f"{type(self).__name__} has no parameter {k!r} (it has {valid})")
+            setattr(self, k, v)
+        return self
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{k}={v!r}" for k, v in self.get_params().items())
+        return f"{type(self).__name__}({args})"
+
+    # -- fit / predict --------------------------------------------------------------------
+    def fit(self: E, X: Any, y: Any) -> E:
+        names = _column_names(X)
+        x = as_matrix(X)
+        yv = as_vector(y, n=x.shape[0])
+        self._fit(x, yv)
+        self.n_features_in_ = x.shape[1]
+        self.feature_names_in_ = names
+        self.target_name_ = getattr(y, "name", None) if isinstance(getattr(y, "name", None), str) else None
+        return self
+
+    def predict(self, X: Any) -> F64:
+        self._check_fitted()
+        return self._predict(as_matrix(X))
+
+    def fit_run(self: E, run: Any, target: str, features: list[str]) -> E:
+        """Fit on the named columns of a :class:`thermerr_rs.Run`."""
+        self.fit(run.matrix(features), run[target])
+        self.feature_names_in_ = list(features)
+        self.target_name_ = target
+        return self
+
+    def predict_run(self, run: Any) -> F64:
+        """Predict a run from the columns the model was fitted on."""
+        self._check_fitted()
+        if not self.feature_names_in_:
+            raise ModelFormatError("this model does not record its feature columns; use predict(X)")
+        return self.predict(run.matrix(self.feature_names_in_))
+
+    def score(self, X: Any, y: Any) -> float:
+        """Coefficient of determination R², as scikit-learn's regressors define it."""
+        yv = as_vector(y)
+        p = self.predict(X)
+        ss_res = float(np.sum((yv - p) ** 2))
+        ss_tot = float(np.sum((yv - yv.mean()) ** 2))
+        return 1.0 - ss_res / ss_tot if ss_tot > 0 else 0.0
+
+    def _check_fitted(self) -> None:
+        if getattr(self, "_inner", None) is None:
+            raise NotFittedError(f"this {type(self).__name__} is not fitted yet: call fit first")
+
+    # subclass hooks
+    def _fit(self, x: F64, y: F64) -> None:
+        raise NotImplementedError
+
+    def _predict(self, x: F64) -> F64:
+        raise NotImplementedError
+
+    def _state(self) -> dict[str, Any]:
+        """JSON-able fitted state (the ``model`` field of the file)."""
+        raise NotImplementedError
+
+    def _restore(self, state: dict[str, Any]) -> None:
+        raise NotImplementedError
+
+    # -- model files ----------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        self._check_fitted()
+        from . import __version__
+
+        return {
+            "format_version": FORMAT_VERSION,
+            "kind": self.kind,
+            "library": f"thermerr_rs {__version__}",
+            "params": _jsonable(self.get_params()),
+            "n_features": int(self.n_features_in_),
+            "features": self.feature_names_in_,
+            "target": self.target_name_,
+            "model": self._state(),
+        }
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=1, allow_nan=False)
+
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the model as versioned JSON, atomically."""
+        try:
+            text = self.to_json()
+        except ValueError as e:  # allow_nan=False
+            raise ModelFormatError(f"cannot save a model holding non-finite numbers: {e}") from None
+        return write_atomic(path, text)
+
+    @classmethod
+    def from_dict(cls, doc: dict[str, Any]) -> Estimator:
+        return _from_dict(doc, expect=cls)
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {"json": self.to_json()} if getattr(self, "_inner", None) is not None else {
+            "params": self.get_params()
+        }
+
+    def __setstate__(self, st: dict[str, Any]) -> None:
+        if "json" in st:
+            other = _from_dict(json.loads(st["json"]), expect=type(self))
+            self.__dict__.update(other.__dict__)
+        else:
+            type(self).__init__(self, **st["params"])
+
+
+def _column_names(X: Any) -> list[str] | None:
+    cols = getattr(X, "columns", None)
+    if cols is None:
+        return None
+    names = [str(c) for c in cols]
+    return names or None
+
+
+def _jsonable(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {k: _jsonable(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_jsonable(x) for x in v]
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    return v
+
+
+def _from_dict(doc: Any, expect: type[Estimator] | None = None) -> Estimator:
+    if not isinstance(doc, dict):
+        raise ModelFormatError("a model file holds a JSON object")
+    for field in ("format_version", "kind", "params", "n_features", "model"):
+        if field not in doc:
+            raise ModelFormatError(f"missing field {field!r}")
+    if doc["format_version"] != FORMAT_VERSION:
+        raise ModelFormatError(
+            f"format_version {doc['format_version']!r} is not supported (this library reads {FORMAT_VERSION})"
+        )
+    kind = doc["kind"]
+    cls = _REGISTRY.get(kind)
+    if cls is None:
+        raise ModelFormatError(f"unknown model kind {kind!r} (known: {sorted(_REGISTRY)})")
+    if expect is not None and expect is not Estimator and not issubclass(cls, expect):
+        raise ModelFormatError(f"the file holds a {kind!r} model, not a {expect.kind!r}")
+    try:
+        est = cls(**doc["params"])
+        est._restore(doc["model"])
+    except (TypeError, KeyError) as e:
+        raise ModelFormatError(f"{kind} model: bad or missing field: {e}") from None
+    est.n_features_in_ = int(doc["n_features"])
+    est.feature_names_in_ = doc.get("features")
+    est.target_name_ = doc.get("target")
+    return est
+
+
+def load_model(path: str | os.PathLike[str]) -> Estimator:
+    """Read a model file written by ``save``; the class is chosen by its ``kind``."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"{p}: no such model file") from None
+    except UnicodeDecodeError:
+        raise ModelFormatError(f"{p}: not UTF-8 text") from None
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as e:
+        raise ModelFormatError(f"{p}: not JSON ({e})") from None
+    try:
+        return _from_dict(doc)
+    except ModelFormatError as e:
+        raise ModelFormatError(f"{p}: {e}") from None

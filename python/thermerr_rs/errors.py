@@ -1,0 +1,59 @@
+"""Exceptions raised by thermerr_rs.
+
+Every class derives from :class:`ThermerrError` *and* from the builtin a caller would catch, so
+``except ValueError`` keeps working. The Rust binding raises these classes by name.
+"""
+
+from __future__ import annotations
+
+
+class ThermerrError(Exception):
+    """Base class of every error thermerr_rs raises on purpose."""
+
+
+class ParameterError(ThermerrError, ValueError):
+    """A hyper-parameter is out of its domain."""
+
+
+class ShapeError(ThermerrError, ValueError):
+    """Arrays of the wrong shape, empty input, or a feature count the model was not fitted on."""
+
+
+class DataError(ThermerrError, ValueError):
+    """Data that cannot be used: a non-numeric cell, NaN, time not increasing, no rows, ..."""
+
+
+class MissingColumnError(ThermerrError, KeyError):
+    """A column asked for by name is not in the run."""
+
+    def __str__(self) -> str:  # KeyError would quote the whole message
+        return str(self.args[0]) if self.args else ""
+
+
+class NumericalError(ThermerrError, ArithmeticError):
+    """A singular system or a similar numerical breakdown."""
+
+
+class ConvergenceError(ThermerrError, RuntimeError):
+    """An iterative method did not meet its tolerance."""
+
+
+class NotFittedError(ThermerrError, AttributeError):
+    """A model was used before ``fit``."""
+
+
+class ModelFormatError(ThermerrError, ValueError):
+    """A model file that this version cannot read (schema version, kind, missing field)."""
+
+
+__all__ = [
+    "ThermerrError",
+    "ParameterError",
+    "ShapeError",
+    "DataError",
+    "MissingColumnError",
+    "NumericalError",
+    "ConvergenceError",
+    "NotFittedError",
+    "ModelFormatError",
+]

@@ -1,0 +1,51 @@
+"""Multiple linear regression."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from . import _core
+from ._arrays import F64
+from .base import Estimator
+
+
+class MLR(Estimator):
+    """Ordinary least squares ``y = intercept_ + X @ coef_`` (the seeds' "multiple linear
+    regression" baseline). Equals scikit-learn's ``LinearRegression`` on the same data.
+
+    Fitted attributes: ``coef_`` (n_features,), ``intercept_`` (float), ``n_features_in_``.
+    """
+
+    kind = "mlr"
+
+    def __init__(self, *, fit_intercept: bool = True) -> None:
+        self.fit_intercept = fit_intercept
+        self._inner: _core.MlrModel | None = None
+
+    def _fit(self, x: F64, y: F64) -> None:
+        self._inner = _core.MlrModel.fit(x, y, fit_intercept=bool(self.fit_intercept))
+
+    def _predict(self, x: F64) -> F64:
+        assert self._inner is not None
+        return self._inner.predict(x)
+
+    @property
+    def coef_(self) -> F64:
+        self._check_fitted()
+        assert self._inner is not None
+        return self._inner.coef
+
+    @property
+    def intercept_(self) -> float:
+        self._check_fitted()
+        assert self._inner is not None
+        return self._inner.intercept
+
+    def _state(self) -> dict[str, Any]:
+        assert self._inner is not None
+        state: dict[str, Any] = json.loads(self._inner.to_json())
+        return state
+
+    def _restore(self, state: dict[str, Any]) -> None:
+        self._inner = _core.MlrModel.from_json(json.dumps(state))

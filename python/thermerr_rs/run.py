@@ -1,0 +1,128 @@
+"""Measured runs: ``time_s`` plus ``T_*`` temperatures, ``E_*`` errors and ``U_*`` inputs."""
+
+from __future__ import annotations
+
+import os
+import warnings
+from typing import Any, Literal
+
+import numpy as np
+
+from . import _core
+from ._arrays import F64
+from .errors import DataError, MissingColumnError
+
+NanPolicy = Literal["error", "drop", "interpolate"]
+
+
+class Run:
+    """A validated measured run. Columns are float64 numpy arrays, by name: ``run["T_spindle"]``.
+
+    ``temperatures``, ``errors`` and ``inputs`` list the ``T_*``, ``E_*`` and ``U_*`` names in
+    file order. Parsing and validation happen in Rust; see :func:`read_run`.
+    """
+
+    def __init__(self, parts: dict[str, Any]) -> None:
+        self.source: str = parts["source"]
+        self.time_s: F64 = np.asarray(parts["time_s"], dtype=np.float64)
+        self.names: list[str] = list(parts["names"])
+        self._data: F64 = np.asarray(parts["data"], dtype=np.float64)
+        self.ignored: list[str] = list(parts["ignored"])
+        self.dropped_rows: list[int] = list(parts["dropped_rows"])
+        self.interpolated: int = int(parts["interpolated"])
+        self._index = {n: k for k, n in enumerate(self.names)}
+        if self.ignored:
+            warnings.warn(
+                f"{self.source}: ignoring columns without a T_/E_/U_ prefix: {', '.join(self.ignored)}",
+                UserWarning,
+                stacklevel=3,
+            )
+
+    @classmethod
+    def from_frame(cls, df: Any, *, nan: NanPolicy = "error", source: str = "<DataFrame>") -> Run:
+        """Build a run from a pandas or polars DataFrame (or any mapping of column → values)."""
+        names = [str(c) for c in df.columns] if hasattr(df, "columns") else [str(k) for k in df]
+        cols = []
+        for name in names:
+            col = df[name]
+            if hasattr(col, "to_numpy"):
+                col = col.to_numpy()
+            try:
+                cols.append(np.asarray(col, dtype=np.float64))
+            except (TypeError, ValueError):
+                raise DataError(f"{source}: column `{name}` is not numeric") from None
+        if not cols:
+            raise DataError(f"{source}: no columns")
+        data = np.ascontiguousarray(np.column_stack(cols), dtype=np.float64)
+        return cls(_core.run_from_columns(source, names, data, nan))
+
+    def __len__(self) -> int:
+        return int(self.time_s.shape[0])
+
+    def __contains__(self, name: object) -> bool:
+        return name == "time_s" or name in self._index
+
+    def __getitem__(self, name: str) -> F64:
+        if name == "time_s":
+            return self.time_s
+        k = self._index.get(name)
+        if k is None:
+            raise MissingColumnError(
+                f"{self.source}: no column named `{name}` (columns are: {', '.join(self.names)})"
+            )
+        col: F64 = self._data[:, k]
+        return col
+
+    def _prefixed(self, prefix: str) -> list[str]:
+        return [n for n in self.names if n.startswith(prefix)]
+
+    @property
+    def temperatures(self) -> list[str]:
+        return self._prefixed("T_")
+
+    @property
+    def errors(self) -> list[str]:
+        return self._prefixed("E_")
+
+    @property
+    def inputs(self) -> list[str]:
+        return self._prefixed("U_")
+
+    def matrix(self, names: list[str]) -> F64:
+        """The named columns as a C-contiguous (samples × len(names)) float64 matrix."""
+        if not names:
+            raise DataError("no columns asked for")
+        return np.ascontiguousarray(np.column_stack([self[n] for n in names]))
+
+    def slice(self, start: int | None = None, stop: int | None = None) -> Run:
+        """Rows ``start:stop`` as a new run (time is kept as measured)."""
+        sl = slice(start, stop)
+        parts = {
+            "source": self.source,
+            "time_s": self.time_s[sl].copy(),
+            "names": self.names,
+            "data": self._data[sl].copy(),
+            "ignored": [],
+            "dropped_rows": [],
+            "interpolated": 0,
+        }
+        if parts["time_s"].shape[0] == 0:
+            raise DataError(f"{self.source}: rows {start}:{stop} select nothing")
+        return Run(parts)
+
+    def __repr__(self) -> str:
+        return (
+            f"Run({self.source!r}, {len(self)} samples, {len(self.temperatures)} T, "
+            f"{len(self.errors)} E, {len(self.inputs)} U)"
+        )
+
+
+def read_run(path: str | os.PathLike[str], nan: NanPolicy = "error") -> Run:
+    """Read and validate a run CSV (formats.md, "Measured run").
+
+    ``nan``: ``"error"`` (default) refuses a missing value, naming its row and column;
+    ``"drop"`` drops rows with any missing value; ``"interpolate"`` fills gaps linearly in time.
+    Every refusal names the file, and the row and column where there is one. Columns without a
+    ``T_``/``E_``/``U_`` prefix are ignored with a warning.
+    """
+    return Run(_core.read_run(os.fspath(path), nan))

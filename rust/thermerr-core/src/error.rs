@@ -1,0 +1,96 @@
+//! One error enum for the whole core. The Python binding maps every variant to an exception.
+
+use std::path::PathBuf;
+
+/// Result alias used throughout the core.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Every way a kernel or a reader can refuse its input or fail.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A hyper-parameter is out of its domain.
+    #[error("invalid parameter `{name}`: {reason}")]
+    InvalidParam { name: &'static str, reason: String },
+
+    /// Arrays of the wrong shape, or empty where data is required.
+    #[error("{0}")]
+    Shape(String),
+
+    /// A NaN or infinity where finite numbers are required.
+    #[error("{what} contains a non-finite value at row {row}, column {col}")]
+    NonFinite {
+        what: String,
+        row: usize,
+        col: usize,
+    },
+
+    /// A file could not be opened or read.
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// A file could be read but its content is invalid. `row` counts data rows from 1 (the header
+    /// is row 0); `line` is the 1-based line in the file.
+    #[error("{}", format_parse(.file, .line, .row, .column, .reason))]
+    Parse {
+        file: String,
+        line: Option<u64>,
+        row: Option<u64>,
+        column: Option<String>,
+        reason: String,
+    },
+
+    /// A column asked for by name is not in the data.
+    #[error("{file}: no column named `{column}` (columns are: {available})")]
+    MissingColumn {
+        file: String,
+        column: String,
+        available: String,
+    },
+
+    /// A linear system that cannot be solved, a distance that collapsed, and the like.
+    #[error("numerical failure: {0}")]
+    Numerical(String),
+
+    /// An iterative method ran out of iterations before meeting its tolerance.
+    #[error("did not converge: {0}")]
+    Convergence(String),
+
+    /// A model file that is not what this version of the library writes.
+    #[error("model file: {0}")]
+    Format(String),
+}
+
+fn format_parse(
+    file: &str,
+    line: &Option<u64>,
+    row: &Option<u64>,
+    column: &Option<String>,
+    reason: &str,
+) -> String {
+    let mut s = file.to_string();
+    if let Some(l) = line {
+        s.push_str(&format!(", line {l}"));
+    }
+    if let Some(r) = row {
+        s.push_str(&format!(", row {r}"));
+    }
+    if let Some(c) = column {
+        s.push_str(&format!(", column `{c}`"));
+    }
+    s.push_str(": ");
+    s.push_str(reason);
+    s
+}
+
+impl Error {
+    pub(crate) fn param(name: &'static str, reason: impl Into<String>) -> Self {
+        Error::InvalidParam {
+            name,
+            reason: reason.into(),
+        }
+    }
+}

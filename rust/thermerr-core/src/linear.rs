@@ -1,0 +1,104 @@
+//! Multiple linear regression: ordinary least squares with an intercept.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::linalg::lstsq;
+use crate::samples::{check_target, Samples};
+
+/// Hyper-parameters of [`LinearRegression`].
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MlrParams {
+    pub fit_intercept: bool,
+}
+
+impl Default for MlrParams {
+    fn default() -> Self {
+        MlrParams {
+            fit_intercept: true,
+        }
+    }
+}
+
+/// A fitted linear model y = b + Σ_j w_j x_j.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LinearRegression {
+    pub coef: Vec<f64>,
+    pub intercept: f64,
+}
+
+impl MlrParams {
+    /// Fits by least squares on centred data, as scikit-learn's `LinearRegression` does (centring
+    /// keeps the intercept out of the conditioning of the design matrix).
+    pub fn fit(&self, x: Samples<'_>, y: &[f64]) -> Result<LinearRegression> {
+        x.require_finite("X")?;
+        check_target(y, x.nrows())?;
+        let (n, d) = (x.nrows(), x.ncols());
+        let (xm, ym) = if self.fit_intercept {
+            let mut xm = vec![0.0; d];
+            for row in x.rows() {
+                for (m, v) in xm.iter_mut().zip(row) {
+                    *m += v;
+                }
+            }
+            xm.iter_mut().for_each(|m| *m /= n as f64);
+            (xm, y.iter().sum::<f64>() / n as f64)
+        } else {
+            (vec![0.0; d], 0.0)
+        };
+        let a = faer::Mat::from_fn(n, d, |i, j| x.get(i, j) - xm[j]);
+        let b: Vec<f64> = y.iter().map(|v| v - ym).collect();
+        let coef = lstsq(a.as_ref(), &b)?;
+        let intercept = ym - coef.iter().zip(&xm).map(|(c, m)| c * m).sum::<f64>();
+        Ok(LinearRegression { coef, intercept })
+    }
+}
+
+impl LinearRegression {
+    pub fn n_features(&self) -> usize {
+        self.coef.len()
+    }
+
+    /// Predicts one sample.
+    #[inline]
+    pub fn predict_one(&self, x: &[f64]) -> f64 {
+        self.intercept + self.coef.iter().zip(x).map(|(c, v)| c * v).sum::<f64>()
+    }
+
+    pub fn predict(&self, x: Samples<'_>) -> Result<Vec<f64>> {
+        check_features(x.ncols(), self.n_features())?;
+        x.require_finite("X")?;
+        Ok(x.rows().map(|r| self.predict_one(r)).collect())
+    }
+}
+
+/// Errors when a sample matrix has another number of columns than the model was fitted on.
+pub fn check_features(got: usize, want: usize) -> Result<()> {
+    if got != want {
+        return Err(Error::Shape(format!(
+            "X has {got} features, but the model was fitted with {want}"
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn recovers_exact_plane() {
+        let x: Vec<f64> = (0..20)
+            .flat_map(|i| [i as f64, ((i * 7) % 5) as f64])
+            .collect();
+        let y: Vec<f64> = x.chunks(2).map(|r| 3.0 + 0.5 * r[0] - 2.0 * r[1]).collect();
+        let m = MlrParams::default()
+            .fit(Samples::new(&x, 20, 2).unwrap(), &y)
+            .unwrap();
+        assert_relative_eq!(m.intercept, 3.0, epsilon = 1e-10);
+        assert_relative_eq!(m.coef[0], 0.5, epsilon = 1e-12);
+        assert_relative_eq!(m.coef[1], -2.0, epsilon = 1e-12);
+        assert!(m.predict(Samples::new(&[1.0], 1, 1).unwrap()).is_err());
+    }
+}

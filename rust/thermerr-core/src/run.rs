@@ -1,0 +1,433 @@
+//! Measured runs (formats.md, "Measured run"): `time_s` plus `T_*`, `E_*`, `U_*` columns.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+
+/// What to do with missing values (empty cells or `NaN`) in data columns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum NanPolicy {
+    /// The first missing value is an error naming its row and column.
+    Error,
+    /// Rows with any missing value are dropped.
+    Drop,
+    /// Missing values are interpolated linearly in time; leading/trailing gaps take the nearest
+    /// value.
+    Interpolate,
+}
+
+impl std::str::FromStr for NanPolicy {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "error" => Ok(NanPolicy::Error),
+            "drop" => Ok(NanPolicy::Drop),
+            "interpolate" => Ok(NanPolicy::Interpolate),
+            other => Err(Error::param(
+                "nan",
+                format!("must be \"error\", \"drop\" or \"interpolate\", got {other:?}"),
+            )),
+        }
+    }
+}
+
+/// The prefixes of the columns a run carries.
+pub const PREFIXES: [&str; 3] = ["T_", "E_", "U_"];
+
+/// A validated measured run. Columns keep the file's order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Run {
+    /// Where it came from (a path, or `<DataFrame>`), used in error messages.
+    pub source: String,
+    pub time_s: Vec<f64>,
+    pub names: Vec<String>,
+    pub columns: Vec<Vec<f64>>,
+    /// Columns that were ignored because their prefix is not one of [`PREFIXES`].
+    pub ignored: Vec<String>,
+    /// 1-based data-row numbers dropped under [`NanPolicy::Drop`].
+    pub dropped_rows: Vec<usize>,
+    /// Number of values filled under [`NanPolicy::Interpolate`].
+    pub interpolated: usize,
+}
+
+impl Run {
+    /// Reads a CSV file. Every refusal names the file, and the row/line and column where there is
+    /// one.
+    pub fn read_csv(path: &Path, nan: NanPolicy) -> Result<Run> {
+        let file = path.display().to_string();
+        let bytes = std::fs::read(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
+        let mut rdr = csv::ReaderBuilder::new()
+            .has_headers(true)
+            .trim(csv::Trim::All)
+            .from_reader(bytes);
+        let header = rdr.headers().map_err(|e| csv_error(&file, e))?.clone();
+        let names: Vec<String> = header.iter().map(str::to_string).collect();
+        let parsed: Vec<bool> = names
+            .iter()
+            .map(|s| s == "time_s" || is_data_column(s))
+            .collect();
+        let mut cells: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
+        let mut lines: Vec<u64> = Vec::new();
+        let mut record = csv::StringRecord::new();
+        let mut row = 0u64;
+        loop {
+            match rdr.read_record(&mut record) {
+                Ok(false) => break,
+                Ok(true) => {}
+                Err(e) => return Err(csv_error(&file, e)),
+            }
+            row += 1;
+            let line = record.position().map(|p| p.line()).unwrap_or(row + 1);
+            for (j, cell) in record.iter().enumerate() {
+                if !parsed[j] {
+                    cells[j].push(f64::NAN);
+                    continue;
+                }
+                let v = parse_cell(cell).ok_or_else(|| Error::Parse {
+                    file: file.clone(),
+                    line: Some(line),
+                    row: Some(row),
+                    column: Some(names[j].clone()),
+                    reason: format!("{cell:?} is not a number"),
+                })?;
+                cells[j].push(v);
+            }
+            lines.push(line);
+        }
+        Run::from_columns(&file, names, cells, nan, Some(&lines))
+    }
+
+    /// Validates named columns (all of equal length). `lines` maps data rows to file lines for
+    /// error messages, when the data came from a file.
+    pub fn from_columns(
+        source: &str,
+        names: Vec<String>,
+        columns: Vec<Vec<f64>>,
+        nan: NanPolicy,
+        lines: Option<&[u64]>,
+    ) -> Result<Run> {
+        let at = |row: usize, column: &str, reason: String| Error::Parse {
+            file: source.to_string(),
+            line: lines.and_then(|l| l.get(row).copied()),
+            row: Some(row as u64 + 1),
+            column: Some(column.to_string()),
+            reason,
+        };
+        let whole = |reason: String| Error::Parse {
+            file: source.to_string(),
+            line: None,
+            row: None,
+            column: None,
+            reason,
+        };
+        if names.len() != columns.len() {
+            return Err(Error::Shape(format!(
+                "{} names for {} columns",
+                names.len(),
+                columns.len()
+            )));
+        }
+        for (k, name) in names.iter().enumerate() {
+            if names[..k].contains(name) {
+                return Err(whole(format!("column `{name}` appears twice")));
+            }
+        }
+        let n = columns.first().map_or(0, Vec::len);
+        if columns.iter().any(|c| c.len() != n) {
+            return Err(Error::Shape("columns of unequal length".into()));
+        }
+        let Some(t_idx) = names.iter().position(|s| s == "time_s") else {
+            return Err(whole(format!(
+                "no `time_s` column (columns are: {})",
+                names.join(", ")
+            )));
+        };
+        if n == 0 {
+            return Err(whole("no data rows".into()));
+        }
+        let time = &columns[t_idx];
+        for (i, t) in time.iter().enumerate() {
+            if !t.is_finite() {
+                return Err(at(i, "time_s", "time is missing".into()));
+            }
+            if i > 0 && *t <= time[i - 1] {
+                return Err(at(
+                    i,
+                    "time_s",
+                    format!(
+                        "time is not strictly increasing ({} after {})",
+                        t,
+                        time[i - 1]
+                    ),
+                ));
+            }
+        }
+        let mut keep_names = Vec::new();
+        let mut keep_cols = Vec::new();
+        let mut ignored = Vec::new();
+        for (name, col) in names.iter().zip(&columns) {
+            if name == "time_s" {
+                continue;
+            }
+            if is_data_column(name) {
+                keep_names.push(name.clone());
+                keep_cols.push(col.clone());
+            } else {
+                ignored.push(name.clone());
+            }
+        }
+        let mut time = time.clone();
+        let mut dropped_rows = Vec::new();
+        let mut interpolated = 0;
+        match nan {
+            NanPolicy::Error => {
+                for i in 0..n {
+                    for (name, col) in keep_names.iter().zip(&keep_cols) {
+                        if col[i].is_nan() {
+                            return Err(at(
+                                i,
+                                name,
+                                "missing value (use nan=\"drop\" or \"interpolate\" to accept gaps)"
+                                    .into(),
+                            ));
+                        }
+                    }
+                }
+            }
+            NanPolicy::Drop => {
+                let keep: Vec<bool> = (0..n)
+                    .map(|i| keep_cols.iter().all(|c| !c[i].is_nan()))
+                    .collect();
+                dropped_rows = (0..n).filter(|&i| !keep[i]).map(|i| i + 1).collect();
+                if dropped_rows.len() == n {
+                    return Err(whole(
+                        "every row has a missing value: nothing left after dropping".into(),
+                    ));
+                }
+                let filt = |v: &Vec<f64>| -> Vec<f64> {
+                    v.iter()
+                        .zip(&keep)
+                        .filter(|(_, k)| **k)
+                        .map(|(x, _)| *x)
+                        .collect()
+                };
+                time = filt(&time);
+                keep_cols = keep_cols.iter().map(filt).collect();
+            }
+            NanPolicy::Interpolate => {
+                for (name, col) in keep_names.iter().zip(keep_cols.iter_mut()) {
+                    let filled = interpolate_gaps(&time, col);
+                    if filled == usize::MAX {
+                        return Err(whole(format!("column `{name}` has no values at all")));
+                    }
+                    interpolated += filled;
+                }
+            }
+        }
+        Ok(Run {
+            source: source.to_string(),
+            time_s: time,
+            names: keep_names,
+            columns: keep_cols,
+            ignored,
+            dropped_rows,
+            interpolated,
+        })
+    }
+
+    pub fn len(&self) -> usize {
+        self.time_s.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.time_s.is_empty()
+    }
+
+    /// The column called `name`, or an error listing the columns there are.
+    pub fn column(&self, name: &str) -> Result<&[f64]> {
+        if name == "time_s" {
+            return Ok(&self.time_s);
+        }
+        self.names
+            .iter()
+            .position(|s| s == name)
+            .map(|k| self.columns[k].as_slice())
+            .ok_or_else(|| Error::MissingColumn {
+                file: self.source.clone(),
+                column: name.to_string(),
+                available: self.names.join(", "),
+            })
+    }
+
+    /// Names of the columns that start with `prefix`, in file order.
+    pub fn names_with_prefix(&self, prefix: &str) -> Vec<String> {
+        self.names
+            .iter()
+            .filter(|s| s.starts_with(prefix))
+            .cloned()
+            .collect()
+    }
+
+    /// The named columns as a row-major `len × names.len()` matrix.
+    pub fn matrix(&self, names: &[String]) -> Result<Vec<f64>> {
+        let cols: Vec<&[f64]> = names
+            .iter()
+            .map(|s| self.column(s))
+            .collect::<Result<_>>()?;
+        let mut out = Vec::with_capacity(self.len() * cols.len());
+        for i in 0..self.len() {
+            out.extend(cols.iter().map(|c| c[i]));
+        }
+        Ok(out)
+    }
+}
+
+fn is_data_column(name: &str) -> bool {
+    PREFIXES
+        .iter()
+        .any(|p| name.starts_with(p) && name.len() > p.len())
+}
+
+fn parse_cell(cell: &str) -> Option<f64> {
+    if cell.is_empty() || cell.eq_ignore_ascii_case("nan") {
+        return Some(f64::NAN);
+    }
+    cell.parse::<f64>().ok().filter(|v| v.is_finite())
+}
+
+fn csv_error(file: &str, e: csv::Error) -> Error {
+    let line = e.position().map(|p| p.line());
+    let reason = match e.kind() {
+        csv::ErrorKind::Utf8 { err, .. } => {
+            format!("not valid UTF-8 (field {})", err.field() + 1)
+        }
+        csv::ErrorKind::UnequalLengths {
+            expected_len, len, ..
+        } => format!("{len} fields where the header has {expected_len}"),
+        csv::ErrorKind::Io(err) => err.to_string(),
+        _ => e.to_string(),
+    };
+    Error::Parse {
+        file: file.to_string(),
+        line,
+        row: line.map(|l| l.saturating_sub(1)),
+        column: None,
+        reason,
+    }
+}
+
+/// Fills NaN gaps in place, linear in `t`. Returns how many values it filled, or `usize::MAX`
+/// when the column has no value at all.
+fn interpolate_gaps(t: &[f64], v: &mut [f64]) -> usize {
+    let known: Vec<usize> = (0..v.len()).filter(|&i| !v[i].is_nan()).collect();
+    if known.is_empty() {
+        return usize::MAX;
+    }
+    let mut filled = 0;
+    for i in 0..v.len() {
+        if !v[i].is_nan() {
+            continue;
+        }
+        filled += 1;
+        let after = known.partition_point(|&k| k < i);
+        v[i] = match (after.checked_sub(1).map(|a| known[a]), known.get(after)) {
+            (Some(a), Some(&b)) => v[a] + (v[b] - v[a]) * (t[i] - t[a]) / (t[b] - t[a]),
+            (Some(a), None) => v[a],
+            (None, Some(&b)) => v[b],
+            (None, None) => unreachable!("known is non-empty"),
+        };
+    }
+    filled
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Write;
+
+    fn write(text: &[u8]) -> tempfile_path::TempPath {
+        tempfile_path::TempPath::with(text)
+    }
+
+    mod tempfile_path {
+        pub struct TempPath(pub std::path::PathBuf);
+        impl TempPath {
+            pub fn with(text: &[u8]) -> Self {
+                use std::sync::atomic::{AtomicUsize, Ordering};
+                static N: AtomicUsize = AtomicUsize::new(0);
+                let p = std::env::temp_dir().join(format!(
+                    "thermerr-run-test-{}-{}.csv",
+                    std::process::id(),
+                    N.fetch_add(1, Ordering::SeqCst)
+                ));
+                let mut f = std::fs::File::create(&p).unwrap();
+                super::Write::write_all(&mut f, text).unwrap();
+                TempPath(p)
+            }
+        }
+        impl Drop for TempPath {
+            fn drop(&mut self) {
+                let _ = std::fs::remove_file(&self.0);
+            }
+        }
+    }
+
+    fn err(text: &[u8], nan: NanPolicy) -> String {
+        let p = write(text);
+        Run::read_csv(&p.0, nan).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn reads_a_good_file() {
+        let p = write(b"time_s,T_a,E_z,U_rpm,note\n0,20,0,0,x\n150,21,1.5,3000,y\n");
+        let r = Run::read_csv(&p.0, NanPolicy::Error).unwrap();
+        assert_eq!(r.names, ["T_a", "E_z", "U_rpm"]);
+        assert_eq!(r.ignored, ["note"]);
+        assert_eq!(r.column("E_z").unwrap(), &[0.0, 1.5]);
+        assert!(r.column("E_x").unwrap_err().to_string().contains("E_x"));
+    }
+
+    #[test]
+    fn refusals_name_file_row_and_column() {
+        let e = err(b"time_s,T_a\n0,20\n150,abc\n", NanPolicy::Error);
+        assert!(
+            e.contains("row 2") && e.contains("`T_a`") && e.contains("line 3"),
+            "{e}"
+        );
+        let e = err(b"time_s,T_a\n0,20\n0,21\n", NanPolicy::Error);
+        assert!(
+            e.contains("strictly increasing") && e.contains("row 2"),
+            "{e}"
+        );
+        let e = err(b"t,T_a\n0,20\n", NanPolicy::Error);
+        assert!(e.contains("no `time_s`"), "{e}");
+        let e = err(b"time_s,T_a\n", NanPolicy::Error);
+        assert!(e.contains("no data rows"), "{e}");
+        let e = err(b"time_s,T_a\n0,\n", NanPolicy::Error);
+        assert!(e.contains("missing value") && e.contains("row 1"), "{e}");
+        let e = err(b"time_s,T_a\n0,\xff\n", NanPolicy::Error);
+        assert!(e.contains("UTF-8"), "{e}");
+        let e = err(b"time_s,T_a\n0,1,2\n", NanPolicy::Error);
+        assert!(e.contains("3 fields"), "{e}");
+    }
+
+    #[test]
+    fn nan_policies() {
+        let text = b"time_s,T_a,E_z\n0,20,0\n10,NaN,1\n20,22,2\n30,23,\n";
+        let p = write(text);
+        let r = Run::read_csv(&p.0, NanPolicy::Drop).unwrap();
+        assert_eq!(r.time_s, [0.0, 20.0]);
+        assert_eq!(r.dropped_rows, [2, 4]);
+        let r = Run::read_csv(&p.0, NanPolicy::Interpolate).unwrap();
+        assert_eq!(r.column("T_a").unwrap(), &[20.0, 21.0, 22.0, 23.0]);
+        assert_eq!(r.column("E_z").unwrap(), &[0.0, 1.0, 2.0, 2.0]);
+        assert_eq!(r.interpolated, 2);
+    }
+}

@@ -1,0 +1,62 @@
+//! `thermerr_rs._core`: thin pyo3 wrappers over `thermerr-core`. Inputs are extracted first,
+//! then every kernel runs inside one `py.detach` so long work releases the GIL.
+
+mod error;
+mod fcm;
+mod linear;
+mod rbf;
+mod run;
+
+use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use thermerr_core::Samples;
+
+pub use error::{PyErrWrap, PyRes};
+
+/// Borrows a C-contiguous float64 2-D array as row-major samples.
+pub(crate) fn samples<'a>(x: &'a PyReadonlyArray2<'_, f64>) -> PyResult<Samples<'a>> {
+    let (n, d) = (x.shape()[0], x.shape()[1]);
+    let data = x.as_slice().map_err(|_| {
+        pyo3::exceptions::PyValueError::new_err("X must be a C-contiguous float64 array")
+    })?;
+    Ok(Samples::new(data, n, d).map_err(PyErrWrap)?)
+}
+
+pub(crate) fn slice1<'a>(y: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]> {
+    y.as_slice().map_err(|_| {
+        pyo3::exceptions::PyValueError::new_err("y must be a contiguous float64 array")
+    })
+}
+
+pub(crate) fn vec_to_py(py: Python<'_>, v: Vec<f64>) -> Bound<'_, PyArray1<f64>> {
+    PyArray1::from_vec(py, v)
+}
+
+#[pymodule(gil_used = false)]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    run::register(m)?;
+    linear::register(m)?;
+    fcm::register(m)?;
+    rbf::register(m)?;
+    Ok(())
+}
+
+/// Serialises a fitted model to JSON, refusing non-finite numbers (JSON cannot carry them).
+pub(crate) fn to_json<T: serde::Serialize>(model: &T) -> PyResult<String> {
+    let text = serde_json::to_string(model)
+        .map_err(|e| PyErrWrap(thermerr_core::Error::Format(e.to_string())))?;
+    if text.contains("null") {
+        return Err(PyErrWrap(thermerr_core::Error::Format(
+            "the model holds a non-finite number and cannot be saved".into(),
+        ))
+        .into());
+    }
+    Ok(text)
+}
+
+/// Reads a fitted model back from the JSON [`to_json`] wrote.
+pub(crate) fn from_json<T: serde::de::DeserializeOwned>(text: &str) -> PyResult<T> {
+    serde_json::from_str(text)
+        .map_err(|e| PyErrWrap(thermerr_core::Error::Format(e.to_string())).into())
+}

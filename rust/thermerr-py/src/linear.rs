@@ -1,0 +1,71 @@
+//! Multiple linear regression.
+
+use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use thermerr_core::linear::{LinearRegression, MlrParams};
+
+use crate::{samples, slice1, vec_to_py, PyErrWrap};
+
+/// A fitted linear model (the Python `MLR` estimator holds one).
+#[pyclass(frozen, module = "thermerr_rs._core", name = "MlrModel")]
+pub struct PyMlrModel {
+    inner: LinearRegression,
+}
+
+#[pymethods]
+impl PyMlrModel {
+    #[staticmethod]
+    #[pyo3(signature = (x, y, *, fit_intercept = true))]
+    fn fit(
+        py: Python<'_>,
+        x: PyReadonlyArray2<'_, f64>,
+        y: PyReadonlyArray1<'_, f64>,
+        fit_intercept: bool,
+    ) -> PyResult<Self> {
+        let (xs, ys) = (samples(&x)?, slice1(&y)?);
+        let inner = py
+            .detach(|| MlrParams { fit_intercept }.fit(xs, ys))
+            .map_err(PyErrWrap)?;
+        Ok(PyMlrModel { inner })
+    }
+
+    fn predict<'py>(
+        &self,
+        py: Python<'py>,
+        x: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let xs = samples(&x)?;
+        let y = py.detach(|| self.inner.predict(xs)).map_err(PyErrWrap)?;
+        Ok(vec_to_py(py, y))
+    }
+
+    #[getter]
+    fn coef<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec_to_py(py, self.inner.coef.clone())
+    }
+
+    #[getter]
+    fn intercept(&self) -> f64 {
+        self.inner.intercept
+    }
+
+    #[getter]
+    fn n_features(&self) -> usize {
+        self.inner.n_features()
+    }
+
+    fn to_json(&self) -> PyResult<String> {
+        crate::to_json(&self.inner)
+    }
+
+    #[staticmethod]
+    fn from_json(text: &str) -> PyResult<Self> {
+        Ok(PyMlrModel {
+            inner: crate::from_json(text)?,
+        })
+    }
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyMlrModel>()
+}

@@ -1,0 +1,94 @@
+//! Run I/O and figures of merit.
+
+use std::path::PathBuf;
+
+use numpy::{PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use thermerr_core::metrics;
+use thermerr_core::run::{NanPolicy, Run};
+
+use crate::{slice1, vec_to_py, PyErrWrap};
+
+fn run_to_dict<'py>(py: Python<'py>, run: Run) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let n = run.len();
+    let k = run.names.len();
+    let mut data = Vec::with_capacity(n * k);
+    for i in 0..n {
+        data.extend(run.columns.iter().map(|c| c[i]));
+    }
+    let arr = numpy::PyArray1::from_vec(py, data).reshape([n, k])?;
+    d.set_item("source", run.source)?;
+    d.set_item("time_s", vec_to_py(py, run.time_s))?;
+    d.set_item("names", run.names)?;
+    d.set_item("data", arr)?;
+    d.set_item("ignored", run.ignored)?;
+    d.set_item("dropped_rows", run.dropped_rows)?;
+    d.set_item("interpolated", run.interpolated)?;
+    Ok(d)
+}
+
+/// Reads and validates a run CSV; returns its pieces as a dict (the Python `Run` wraps it).
+#[pyfunction]
+#[pyo3(signature = (path, nan = "error"))]
+fn read_run<'py>(py: Python<'py>, path: PathBuf, nan: &str) -> PyResult<Bound<'py, PyDict>> {
+    let policy: NanPolicy = nan.parse().map_err(PyErrWrap)?;
+    let run = py
+        .detach(|| Run::read_csv(&path, policy))
+        .map_err(PyErrWrap)?;
+    run_to_dict(py, run)
+}
+
+/// Validates in-memory columns (`data` is n × len(names), with `time_s` among the names).
+#[pyfunction]
+#[pyo3(signature = (source, names, data, nan = "error"))]
+fn run_from_columns<'py>(
+    py: Python<'py>,
+    source: &str,
+    names: Vec<String>,
+    data: PyReadonlyArray2<'py, f64>,
+    nan: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let policy: NanPolicy = nan.parse().map_err(PyErrWrap)?;
+    let (n, k) = (data.shape()[0], data.shape()[1]);
+    let view = data.as_array();
+    let columns: Vec<Vec<f64>> = (0..k)
+        .map(|j| (0..n).map(|i| view[(i, j)]).collect())
+        .collect();
+    let run = Run::from_columns(source, names, columns, policy, None).map_err(PyErrWrap)?;
+    run_to_dict(py, run)
+}
+
+/// Figures of merit of `predicted` against `measured`, as a dict.
+#[pyfunction]
+#[pyo3(signature = (measured, predicted, zero_tol = None))]
+fn scores<'py>(
+    py: Python<'py>,
+    measured: PyReadonlyArray1<'py, f64>,
+    predicted: PyReadonlyArray1<'py, f64>,
+    zero_tol: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s =
+        metrics::scores(slice1(&measured)?, slice1(&predicted)?, zero_tol).map_err(PyErrWrap)?;
+    let d = PyDict::new(py);
+    d.set_item("n", s.n)?;
+    d.set_item("rms", s.rms)?;
+    d.set_item("max_abs", s.max_abs)?;
+    d.set_item("band", s.band)?;
+    d.set_item("min_residual", s.min_residual)?;
+    d.set_item("max_residual", s.max_residual)?;
+    d.set_item("mean_accuracy", s.mean_accuracy)?;
+    d.set_item("accuracy_excluded", s.accuracy_excluded)?;
+    d.set_item("zero_tol", s.zero_tol)?;
+    d.set_item("compensation_rate", s.compensation_rate)?;
+    d.set_item("rms_measured", s.rms_measured)?;
+    Ok(d)
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(read_run, m)?)?;
+    m.add_function(wrap_pyfunction!(run_from_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(scores, m)?)?;
+    Ok(())
+}
