@@ -19,6 +19,9 @@ from .errors import ModelFormatError, NotFittedError, ParameterError
 FORMAT_VERSION = 1
 
 _REGISTRY: dict[str, type[Estimator]] = {}
+#: meta-estimators that wrap a model with input preprocessing, by the ``preprocessing.kind``
+#: they write into the model file (the file stays the inner model's, so the edge reads it too)
+_WRAPPERS: dict[str, Any] = {}
 
 E = TypeVar("E", bound="Estimator")
 
@@ -32,6 +35,9 @@ class Estimator:
     feature_names_in_: list[str] | None = None
     #: name of the target column (e.g. ``"E_z"``), when known
     target_name_: str | None = None
+    #: how ``fit_run``/``predict_run`` build inputs from a run's columns: ``"absolute"`` readings,
+    #: or ``"rise"`` (each reading minus the run's first sample, like the error itself)
+    inputs_: str = "absolute"
 
     def __init_subclass__(cls, **kw: Any) -> None:
         super().__init_subclass__(**kw)
@@ -74,19 +80,27 @@ class Estimator:
         self._check_fitted()
         return self._predict(as_matrix(X))
 
-    def fit_run(self: E, run: Any, target: str, features: list[str]) -> E:
-        """Fit on the named columns of a :class:`thermerr_rs.Run`."""
-        self.fit(run.matrix(features), run[target])
+    def fit_run(self: E, run: Any, target: str, features: list[str], *, inputs: str = "absolute") -> E:
+        """Fit on the named columns of a :class:`thermerr_rs.Run`.
+
+        ``inputs="rise"`` models the error from each sensor's rise since the run's first sample
+        (the error is itself relative to the run's start), which carries over between runs that
+        start at different shop temperatures; ``"absolute"`` uses the readings as they are.
+        """
+        if inputs not in ("absolute", "rise"):
+            raise ParameterError(f'inputs must be "absolute" or "rise", got {inputs!r}')
+        self.fit(_run_inputs(run, features, inputs), run[target])
         self.feature_names_in_ = list(features)
         self.target_name_ = target
+        self.inputs_ = inputs
         return self
 
     def predict_run(self, run: Any) -> F64:
-        """Predict a run from the columns the model was fitted on."""
+        """Predict a run from the columns (and input form) the model was fitted on."""
         self._check_fitted()
         if not self.feature_names_in_:
             raise ModelFormatError("this model does not record its feature columns; use predict(X)")
-        return self.predict(run.matrix(self.feature_names_in_))
+        return self.predict(_run_inputs(run, self.feature_names_in_, self.inputs_))
 
     def score(self, X: Any, y: Any) -> float:
         """Coefficient of determination R², as scikit-learn's regressors define it."""
@@ -127,6 +141,8 @@ class Estimator:
             "n_features": int(self.n_features_in_),
             "features": self.feature_names_in_,
             "target": self.target_name_,
+            "inputs": self.inputs_,
+            "preprocessing": None,
             "model": self._state(),
         }
 
@@ -156,6 +172,13 @@ class Estimator:
             self.__dict__.update(other.__dict__)
         else:
             type(self).__init__(self, **st["params"])
+
+
+def _run_inputs(run: Any, features: list[str], inputs: str) -> F64:
+    x = run.matrix(features)
+    if inputs == "rise":
+        x = np.ascontiguousarray(x - x[0])
+    return x
 
 
 def _column_names(X: Any) -> list[str] | None:
@@ -192,7 +215,12 @@ def _from_dict(doc: Any, expect: type[Estimator] | None = None) -> Estimator:
     cls = _REGISTRY.get(kind)
     if cls is None:
         raise ModelFormatError(f"unknown model kind {kind!r} (known: {sorted(_REGISTRY)})")
-    if expect is not None and expect is not Estimator and not issubclass(cls, expect):
+    if (
+        expect is not None
+        and expect is not Estimator
+        and not issubclass(cls, expect)
+        and doc.get("preprocessing") is None
+    ):
         raise ModelFormatError(f"the file holds a {kind!r} model, not a {expect.kind!r}")
     try:
         est = cls(**doc["params"])
@@ -202,7 +230,16 @@ def _from_dict(doc: Any, expect: type[Estimator] | None = None) -> Estimator:
     est.n_features_in_ = int(doc["n_features"])
     est.feature_names_in_ = doc.get("features")
     est.target_name_ = doc.get("target")
-    return est
+    est.inputs_ = doc.get("inputs", "absolute")
+    if est.inputs_ not in ("absolute", "rise"):
+        raise ModelFormatError(f"unknown inputs {est.inputs_!r}")
+    pre = doc.get("preprocessing")
+    if pre is None:
+        return est
+    if not isinstance(pre, dict) or pre.get("kind") not in _WRAPPERS:
+        raise ModelFormatError(f"unknown preprocessing {pre!r} (known: {sorted(_WRAPPERS)})")
+    wrapped: Estimator = _WRAPPERS[pre["kind"]]._wrap_restored(est, pre)
+    return wrapped
 
 
 def load_model(path: str | os.PathLike[str]) -> Estimator:

@@ -1,0 +1,192 @@
+"""The ``thermerr`` command line: one entry point, one subcommand per job.
+
+    thermerr fit RUN.csv --axis E_z --model mlr|rbf [--sensors auto|T_a,T_b] --out MODEL.json
+    thermerr evaluate MODEL.json RUN.csv
+    thermerr select-sensors RUN.csv --axis E_z
+
+Bad input ends with a one-line message on stderr and exit status 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from typing import Any
+
+from . import __version__
+from .base import Estimator, load_model
+from .errors import ThermerrError
+from .linear import MLR
+from .metrics import Scores, scores
+from .pipeline import MinMaxScaled
+from .run import Run, read_run
+
+
+def _progress_enabled(args: argparse.Namespace) -> bool:
+    return not args.quiet and sys.stderr.isatty()
+
+
+def _say(args: argparse.Namespace, *text: Any) -> None:
+    if not args.quiet:
+        print(*text)
+
+
+def _sensors(args: argparse.Namespace, run: Run) -> list[str]:
+    if args.sensors in (None, "all"):
+        names = run.temperatures
+    elif args.sensors == "auto":
+        from .selection import select_sensors
+
+        sel = select_sensors(run, args.axis, n_clusters=args.n_clusters, seed=args.seed)
+        _say(args, f"sensor selection (fuzzy c-means, {args.n_clusters} clusters):")
+        _say(args, sel)
+        _say(args)
+        names = list(sel.selected)
+    else:
+        names = [s.strip() for s in args.sensors.split(",") if s.strip()]
+        for n in names:
+            run[n]  # raises MissingColumnError naming the column and the file
+    if not names:
+        raise ThermerrError(f"{run.source}: no T_* sensor columns to model with")
+    return names
+
+
+def _make_model(args: argparse.Namespace, n_train: int) -> Estimator:
+    if args.model == "mlr":
+        return MLR()
+    from .rbf import RBFNetwork
+
+    rbf = RBFNetwork(
+        design=args.design,
+        spread=args.spread,
+        goal=args.goal if args.goal is not None else 0.1 * n_train,
+        max_neurons=args.max_neurons,
+        n_centers=args.n_centers,
+        seed=args.seed,
+    )
+    return MinMaxScaled(rbf)
+
+
+def _print_scores(args: argparse.Namespace, title: str, s: Scores) -> None:
+    if args.json:
+        return
+    print(f"{title}:")
+    print("  " + str(s).replace("\n", "\n  "))
+
+
+def cmd_fit(args: argparse.Namespace) -> int:
+    run = read_run(args.run, nan=args.nan)
+    run[args.axis]
+    sensors = _sensors(args, run)
+    model = _make_model(args, len(run))
+    model.fit_run(run, args.axis, sensors, inputs=args.inputs)
+    _say(args, f"fitted {args.model} on {len(run)} samples of {run.source}: {args.axis} from {', '.join(sensors)}")
+    report: dict[str, Any] = {"model": args.model, "axis": args.axis, "sensors": sensors}
+    train = scores(run[args.axis], model.predict_run(run))
+    report["train"] = train.as_dict()
+    _print_scores(args, "training run", train)
+    if args.test:
+        test_run = read_run(args.test, nan=args.nan)
+        held = scores(test_run[args.axis], model.predict_run(test_run))
+        report["test"] = held.as_dict()
+        _print_scores(args, f"held-out run {test_run.source}", held)
+    path = model.save(args.out)
+    report["out"] = str(path)
+    if args.json:
+        print(json.dumps(report, indent=1))
+    else:
+        _say(args, f"model written to {path}")
+    return 0
+
+
+def cmd_evaluate(args: argparse.Namespace) -> int:
+    model = load_model(args.model)
+    run = read_run(args.run, nan=args.nan)
+    target = args.axis or model.target_name_
+    if not target:
+        raise ThermerrError(f"{args.model} does not record its target axis: pass --axis")
+    s = scores(run[target], model.predict_run(run))
+    if args.json:
+        print(json.dumps({"axis": target, **s.as_dict()}, indent=1))
+    else:
+        print(f"{model.kind or type(model).__name__} model {args.model} on {run.source}, axis {target}:")
+        print("  " + str(s).replace("\n", "\n  "))
+    return 0
+
+
+def cmd_select(args: argparse.Namespace) -> int:
+    from .selection import select_sensors
+
+    run = read_run(args.run, nan=args.nan)
+    axes = [a.strip() for a in args.axis.split(",") if a.strip()]
+    sel = select_sensors(run, axes[0] if len(axes) == 1 else axes, n_clusters=args.n_clusters, seed=args.seed)
+    print(sel)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="thermerr", description="Machine-tool thermal error models and diagnosis.")
+    p.add_argument("--version", action="version", version=f"thermerr_rs {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    def common(sp: argparse.ArgumentParser) -> None:
+        sp.add_argument("--nan", choices=["error", "drop", "interpolate"], default="error",
+                        help="what to do with missing values in the run (default: error)")
+        sp.add_argument("--quiet", action="store_true", help="no progress bars or chatter")
+        sp.add_argument("--json", action="store_true", help="print results as JSON")
+
+    f = sub.add_parser("fit", help="fit a thermal error model to a run and save it")
+    f.add_argument("run", help="measured run CSV")
+    f.add_argument("--axis", required=True, help="error column to model, e.g. E_z")
+    f.add_argument("--model", choices=["mlr", "rbf"], default="mlr")
+    f.add_argument("--sensors", default="all", help="'all' (default), 'auto' (fuzzy c-means selection) or T_a,T_b,...")
+    f.add_argument("--n-clusters", type=int, default=4, help="clusters for --sensors auto (default 4)")
+    f.add_argument("--seed", type=int, default=0, help="seed of every stochastic step (default 0)")
+    f.add_argument("--design", choices=["exact", "ols", "kmeans"], default="ols", help="RBF design (default ols)")
+    f.add_argument("--spread", type=float, default=1.0, help="RBF spread on [0,1]-scaled inputs (default 1.0)")
+    f.add_argument("--goal", type=float, default=None,
+                   help="RBF sum-squared error goal in µm² (default: 0.1 µm² per training sample)")
+    f.add_argument("--max-neurons", type=int, default=None)
+    f.add_argument("--n-centers", type=int, default=None, help="centres of the kmeans design")
+    f.add_argument("--inputs", choices=["rise", "absolute"], default="rise",
+                   help="model from each sensor's rise since the run's start (default) or absolute readings")
+    f.add_argument("--test", help="a held-out run to score the model on")
+    f.add_argument("--out", required=True, help="model file to write (JSON)")
+    common(f)
+    f.set_defaults(func=cmd_fit)
+
+    e = sub.add_parser("evaluate", help="figures of merit of a saved model on a run")
+    e.add_argument("model", help="model JSON written by 'thermerr fit'")
+    e.add_argument("run", help="measured run CSV")
+    e.add_argument("--axis", default=None, help="error column (default: the model's target)")
+    common(e)
+    e.set_defaults(func=cmd_evaluate)
+
+    s = sub.add_parser("select-sensors", help="pick one sensor per fuzzy c-means cluster (seed 003)")
+    s.add_argument("run", help="measured run CSV")
+    s.add_argument("--axis", required=True, help="error column, or several comma-separated for a composite")
+    s.add_argument("--n-clusters", type=int, default=4)
+    s.add_argument("--seed", type=int, default=0)
+    common(s)
+    s.set_defaults(func=cmd_select)
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.json:
+        args.quiet = True
+    try:
+        rc: int = args.func(args)
+        return rc
+    except (ThermerrError, OSError, KeyError, ValueError) as e:
+        msg = str(e.args[0]) if isinstance(e, KeyError) and e.args else str(e)
+        print(f"thermerr: error: {msg}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
