@@ -1,0 +1,58 @@
+"""The thermerr command line, run as a user would."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+import thermerr_rs as tr
+from thermerr_rs.cli import main
+
+
+def test_fit_and_evaluate_mlr(example_run1, example_run2, tmp_path, capsys):
+    out = tmp_path / "m.json"
+    assert main(["fit", str(example_run1), "--axis", "E_z", "--model", "mlr", "--out", str(out),
+                 "--test", str(example_run2)]) == 0
+    text = capsys.readouterr().out
+    assert "training run" in text and "held-out run" in text and "RMS residual" in text
+    model = tr.load_model(out)
+    assert model.target_name_ == "E_z" and model.inputs_ == "rise"
+    assert main(["evaluate", str(out), str(example_run2), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["axis"] == "E_z"
+    # the bundled example is linear in the node temperatures up to a small quadratic term:
+    # a 20-sensor MLR must compensate most of it on the held-out run
+    assert report["compensation_rate"] > 0.9
+
+
+def test_bad_input_is_one_line(example_run1, tmp_path, capsys):
+    rc = main(["fit", str(example_run1), "--axis", "E_q", "--out", str(tmp_path / "m.json")])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1 and "E_q" in err
+    rc = main(["evaluate", str(tmp_path / "none.json"), str(example_run1)])
+    assert rc == 2 and "none.json" in capsys.readouterr().err
+    rc = main(["fit", str(example_run1), "--axis", "E_z", "--sensors", "T_s01,T_bogus",
+               "--out", str(tmp_path / "m.json")])
+    assert rc == 2 and "T_bogus" in capsys.readouterr().err
+    assert not (tmp_path / "m.json").exists()
+
+
+def test_console_script_runs(example_run1, tmp_path):
+    r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", "--version"], capture_output=True, text=True)
+    assert r.returncode == 0 and "thermerr_rs" in r.stdout
+    r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", "fit", str(example_run1), "--axis", "E_x",
+                        "--out", str(tmp_path / "m.json"), "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    # --quiet drops the chatter and progress, keeps the results
+    assert "fitted" not in r.stdout and "model written" not in r.stdout
+    assert "training run" in r.stdout
+
+
+@pytest.mark.parametrize("argv", [["fit"], ["evaluate"], ["nonsense"]])
+def test_usage_errors(argv):
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 2
