@@ -211,15 +211,8 @@ impl Run {
                         "every row has a missing value: nothing left after dropping".into(),
                     ));
                 }
-                let filt = |v: &Vec<f64>| -> Vec<f64> {
-                    v.iter()
-                        .zip(&keep)
-                        .filter(|(_, k)| **k)
-                        .map(|(x, _)| *x)
-                        .collect()
-                };
-                time = filt(&time);
-                keep_cols = keep_cols.iter().map(filt).collect();
+                time = select(&time, &keep);
+                keep_cols = keep_cols.iter().map(|c| select(c, &keep)).collect();
             }
             NanPolicy::Interpolate => {
                 for (name, col) in keep_names.iter().zip(keep_cols.iter_mut()) {
@@ -287,6 +280,14 @@ impl Run {
         }
         Ok(out)
     }
+}
+
+fn select(v: &[f64], keep: &[bool]) -> Vec<f64> {
+    v.iter()
+        .zip(keep)
+        .filter(|(_, k)| **k)
+        .map(|(x, _)| *x)
+        .collect()
 }
 
 fn is_data_column(name: &str) -> bool {

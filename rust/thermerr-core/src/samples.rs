@@ -176,7 +176,8 @@ impl Matrix {
 }
 
 #[inline]
-pub(crate) fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
+/// Squared Euclidean distance of two equally long slices.
+pub fn sq_dist(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum()
 }
 
