@@ -1,0 +1,405 @@
+"""Synthetic machines and runs with a hidden effect: the project's test bench for diagnosis.
+
+This is deliberately separate code from the Rust simulation it is used to test: a plain
+numpy/scipy integrator (exact zero-order-hold steps through ``scipy.linalg.expm`` of the
+augmented system) of a "true" machine that may carry one effect the nominal model lacks:
+
+=====================  ===================================================================
+``thermal_lag``        the drift follows the temperatures through a first-order lag τ
+``ambient_coupling``   the shop air moves the error directly: + k_amb·(T_amb − T_amb(0))
+``speed_growth``       instantaneous growth with spindle speed: + g·(n/n_ref)²
+``unmodeled_source``   a heat source outside the model (a hydraulic unit) whose temperature
+                       is measured in ``T_hydraulic`` heats a node through a conductance
+``nonlinear_expansion`` + q·ΔT² on one node's rise
+``sensor_drift``       one sensor's reading drifts away from its node at r K/h
+``periodic``           (outside the catalogue) a periodic disturbance A·sin(2πt/P)
+``none``               nothing hidden
+=====================  ===================================================================
+
+Every run also carries a distractor column ``T_cabinet`` (an electrical cabinet that heats up
+but touches nothing), so a diagnosis that names a column must find the right one. Sensor noise
+0.03 °C, probe noise 0.15 µm. The *nominal* machine returned with a case has every parameter
+perturbed by 15–35 % and none of the hidden effect.
+
+Requires scipy (``pip install thermerr_rs[test]``).
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+CAUSES = (
+    "thermal_lag",
+    "ambient_coupling",
+    "speed_growth",
+    "unmodeled_source",
+    "nonlinear_expansion",
+    "sensor_drift",
+)
+HIDDEN = (*CAUSES, "periodic", "none")
+DUTIES = ("stepped", "run_stop", "random")
+
+
+def machine(topology: str) -> dict[str, Any]:
+    """A true machine in the TOML schema of formats.md, as a dict."""
+    if topology == "vmc":
+        return {
+            "name": "vmc-synthetic",
+            "ambient": "T_ambient",
+            "nodes": [
+                {"name": "front_bearing", "capacity_j_per_k": 1800.0, "ambient_w_per_k": 0.7, "sensor": "T_front_bearing"},
+                {"name": "spindle_motor", "capacity_j_per_k": 6000.0, "ambient_w_per_k": 2.5, "sensor": "T_spindle_motor"},
+                {"name": "headstock", "capacity_j_per_k": 30000.0, "ambient_w_per_k": 4.0, "sensor": "T_headstock"},
+                {"name": "column", "capacity_j_per_k": 90000.0, "ambient_w_per_k": 9.0, "sensor": "T_column"},
+                {"name": "bed", "capacity_j_per_k": 250000.0, "ambient_w_per_k": 15.0},
+            ],
+            "links": [
+                {"between": ["front_bearing", "headstock"], "w_per_k": 4.0},
+                {"between": ["spindle_motor", "headstock"], "w_per_k": 5.0},
+                {"between": ["headstock", "column"], "w_per_k": 8.0},
+                {"between": ["column", "bed"], "w_per_k": 12.0},
+            ],
+            "sources": [
+                {"node": "front_bearing", "input": "U_spindle_rpm", "w": 70.0, "ref": 6000.0, "exponent": 1.4},
+                {"node": "spindle_motor", "input": "U_spindle_rpm", "w": 120.0, "ref": 6000.0, "exponent": 1.1},
+            ],
+            "drift": [
+                {"axis": "E_z", "um_per_k": {"front_bearing": 0.8, "headstock": 3.2, "column": 1.8, "bed": -0.6}},
+            ],
+        }
+    if topology == "lathe":
+        return {
+            "name": "lathe-synthetic",
+            "ambient": "T_ambient",
+            "nodes": [
+                {"name": "spindle_bearing", "capacity_j_per_k": 2500.0, "ambient_w_per_k": 0.9, "sensor": "T_spindle_bearing"},
+                {"name": "headstock", "capacity_j_per_k": 40000.0, "ambient_w_per_k": 5.0, "sensor": "T_headstock"},
+                {"name": "x_nut", "capacity_j_per_k": 900.0, "ambient_w_per_k": 0.8, "sensor": "T_x_nut"},
+                {"name": "carriage", "capacity_j_per_k": 20000.0, "ambient_w_per_k": 3.0, "sensor": "T_carriage"},
+                {"name": "bed", "capacity_j_per_k": 200000.0, "ambient_w_per_k": 14.0, "sensor": "T_bed"},
+            ],
+            "links": [
+                {"between": ["spindle_bearing", "headstock"], "w_per_k": 5.0},
+                {"between": ["headstock", "bed"], "w_per_k": 10.0},
+                {"between": ["x_nut", "carriage"], "w_per_k": 3.0},
+                {"between": ["carriage", "bed"], "w_per_k": 6.0},
+            ],
+            "sources": [
+                {"node": "spindle_bearing", "input": "U_spindle_rpm", "w": 60.0, "ref": 4000.0, "exponent": 1.3},
+                {"node": "x_nut", "input": "U_feed_mm_min", "w": 25.0, "ref": 5000.0, "exponent": 1.0},
+            ],
+            "drift": [
+                {"axis": "E_x", "um_per_k": {"spindle_bearing": 1.0, "headstock": 2.8, "x_nut": 1.5, "carriage": 0.9, "bed": -0.4}},
+            ],
+        }
+    raise ValueError(f"unknown topology {topology!r} (vmc, lathe)")
+
+
+@dataclass
+class Case:
+    """One synthetic experiment: training and held-out runs (column dicts), the true and the
+    nominal machine (TOML dicts), and what was hidden."""
+
+    topology: str
+    hidden: str
+    seed: int
+    column: str | None
+    params: dict[str, float]
+    train: dict[str, np.ndarray]
+    test: dict[str, np.ndarray]
+    truth: dict[str, Any]
+    nominal: dict[str, Any]
+    axis: str = field(default="")
+
+    def nominal_toml(self) -> str:
+        return to_toml(self.nominal)
+
+
+def duty(kind: str, t: np.ndarray, ref_rpm: float, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """Spindle speed (and feed) schedules: stepped speeds, run–stop cycles, random duty."""
+    hours = t / 3600.0
+    if kind == "stepped":
+        levels = np.array([0.5, 1.0, 0.75, 0.5, 0.0]) * ref_rpm
+        rpm = levels[np.minimum((hours / (hours[-1] / 5 + 1e-9)).astype(int), 4)]
+    elif kind == "run_stop":
+        on = (np.floor(hours / 1.5) % 2 == 0) & (hours < 0.8 * hours[-1])
+        rpm = np.where(on, 0.8 * ref_rpm, 0.0)
+    elif kind == "random":
+        n_seg = max(4, int(hours[-1] / 0.75))
+        edges = np.sort(rng.uniform(0, hours[-1], n_seg))
+        vals = rng.choice([0.0, 0.3, 0.5, 0.7, 0.9, 1.0], size=n_seg + 1) * ref_rpm
+        rpm = vals[np.searchsorted(edges, hours)]
+    else:
+        raise ValueError(f"unknown duty {kind!r}")
+    feed = np.where(rpm > 0, 2000.0 + 3000.0 * (rpm / ref_rpm), 0.0)
+    return {"U_spindle_rpm": rpm.astype(float), "U_feed_mm_min": feed.astype(float)}
+
+
+def _system(m: dict[str, Any], extra_links: list[tuple[str, str, float]]) -> tuple:
+    names = [n["name"] for n in m["nodes"]]
+    idx = {n: i for i, n in enumerate(names)}
+    cap = np.array([n["capacity_j_per_k"] for n in m["nodes"]])
+    g_amb = np.array([n.get("ambient_w_per_k", 0.0) for n in m["nodes"]])
+    a = np.zeros((len(names), len(names)))
+    for link in m["links"]:
+        i, j = idx[link["between"][0]], idx[link["between"][1]]
+        g = link["w_per_k"]
+        a[i, j] += g
+        a[j, i] += g
+        a[i, i] -= g
+        a[j, j] -= g
+    a[np.diag_indices(len(names))] -= g_amb
+    b_bnd = np.zeros(len(names))
+    for node, _col, g in extra_links:
+        a[idx[node], idx[node]] -= g
+        b_bnd[idx[node]] += g
+    return names, idx, cap, g_amb, a, b_bnd
+
+
+def simulate_truth(
+    m: dict[str, Any],
+    cols: dict[str, np.ndarray],
+    *,
+    lag_s: float | None = None,
+    source: tuple[str, str, float] | None = None,
+) -> dict[str, np.ndarray]:
+    """Exact zero-order-hold integration of the true network; returns node temperatures (by
+    node name) and the instantaneous and lagged drift of each axis (keys ``drift:<axis>``)."""
+    from scipy.linalg import expm
+
+    extra = [source] if source else []
+    names, idx, cap, g_amb, a, b_bnd = _system(m, extra)
+    n = len(names)
+    t = cols["time_s"]
+    amb = cols[m["ambient"]]
+    drift = m["drift"][0]
+    k = np.zeros(n)
+    for node, v in drift["um_per_k"].items():
+        k[idx[node]] = v
+    x = np.array([cols[nd["sensor"]][0] if "sensor" in nd else amb[0] for nd in m["nodes"]], dtype=float)
+    x0 = x.copy()
+    e0 = float(k @ x0)
+    z = 0.0  # lagged drift state (relative)
+    temps = np.empty((len(t), n))
+    e_inst = np.empty(len(t))
+    e_lag = np.empty(len(t))
+    cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+    for s in range(len(t)):
+        temps[s] = x
+        e_inst[s] = k @ x - e0
+        e_lag[s] = z if lag_s else e_inst[s]
+        if s == len(t) - 1:
+            break
+        h = float(t[s + 1] - t[s])
+        q = np.zeros(n)
+        for src in m["sources"]:
+            u = cols[src["input"]][s]
+            q[idx[src["node"]]] += src["w"] * (u / src["ref"]) ** src["exponent"] if u > 0 else 0.0
+        forcing = (q + g_amb * amb[s] + (b_bnd * cols[source[1]][s] if source else 0.0)) / cap
+        # state w = [x, z]: dw/dt = M w + f, with dz/dt = (k·x − e0 − z)/τ; exact ZOH step
+        # w+ = Φ w + Γ f, Φ = e^{Mh}, Γ = ∫₀ʰ e^{Ms} ds, both read off expm of [[M, I], [0, 0]]·h
+        f_aug = np.concatenate([forcing, [-e0 / lag_s if lag_s else 0.0]])
+        pair = cache.get(h)
+        if pair is None:
+            dim = n + 1
+            big = np.zeros((2 * dim, 2 * dim))
+            big[:n, :n] = a / cap[:, None]
+            if lag_s:
+                big[n, :n] = k / lag_s
+                big[n, n] = -1.0 / lag_s
+            big[:dim, dim:] = np.eye(dim)
+            ex = expm(big * h)
+            pair = (ex[:dim, :dim], ex[:dim, dim:])
+            cache[h] = pair
+        phi, gam = pair
+        state = phi @ np.concatenate([x, [z]]) + gam @ f_aug
+        x, z = state[:n], state[n]
+    out = {nm: temps[:, i] for i, nm in enumerate(names)}
+    out["drift:inst"] = e_inst
+    out["drift:lag"] = e_lag
+    return out
+
+
+def _ambient(t: np.ndarray, rng: np.random.Generator, base: float) -> np.ndarray:
+    phase = rng.uniform(0, 2 * np.pi)
+    walk = np.cumsum(rng.normal(0, 0.02, len(t)))
+    walk -= np.linspace(0, walk[-1], len(t))
+    return base + 1.8 * np.sin(2 * np.pi * t / 86400.0 + phase) + 0.3 * walk
+
+
+def _side_columns(t: np.ndarray, amb: np.ndarray, rpm: np.ndarray, rng: np.random.Generator) -> dict[str, np.ndarray]:
+    """T_hydraulic (a unit that warms while the spindle runs, with a chiller cycle) and
+    T_cabinet (a distractor that never touches the structure)."""
+    dt = np.diff(t, prepend=t[0])
+    h = np.zeros(len(t))
+    for i in range(1, len(t)):
+        target = 9.0 if rpm[i - 1] > 0 else 1.0
+        h[i] = h[i - 1] + dt[i] / 2400.0 * (target - h[i - 1])
+    chiller = 1.2 * np.sin(2 * np.pi * t / 5400.0 + rng.uniform(0, 6.28))
+    cab = 4.0 * (1 - np.exp(-t / 5000.0)) + 0.8 * np.sin(2 * np.pi * t / 3100.0 + rng.uniform(0, 6.28))
+    return {"T_hydraulic": amb + h + chiller, "T_cabinet": amb + cab}
+
+
+def _perturb(m: dict[str, Any], rng: np.random.Generator, lo: float = 0.15, hi: float = 0.35) -> dict[str, Any]:
+    out = copy.deepcopy(m)
+
+    def f() -> float:
+        return float(1.0 + rng.choice([-1, 1]) * rng.uniform(lo, hi))
+
+    for nd in out["nodes"]:
+        nd["capacity_j_per_k"] = round(nd["capacity_j_per_k"] * f(), 3)
+        if nd.get("ambient_w_per_k"):
+            nd["ambient_w_per_k"] = round(nd["ambient_w_per_k"] * f(), 4)
+    for ln in out["links"]:
+        ln["w_per_k"] = round(ln["w_per_k"] * f(), 4)
+    for src in out["sources"]:
+        src["w"] = round(src["w"] * f(), 3)
+        src["exponent"] = round(src["exponent"] * (1 + rng.uniform(-0.1, 0.1)), 3)
+    for dr in out["drift"]:
+        dr["um_per_k"] = {kk: round(v * f(), 4) for kk, v in dr["um_per_k"].items()}
+    out["name"] = out["name"].replace("synthetic", "nominal")
+    return out
+
+
+def _run(
+    m: dict[str, Any],
+    hidden: str,
+    hp: dict[str, Any],
+    duty_kind: str,
+    hours: float,
+    dt: float,
+    rng: np.random.Generator,
+    *,
+    noise: bool = True,
+) -> dict[str, np.ndarray]:
+    t = np.arange(0.0, hours * 3600.0 + 1e-9, dt)
+    src0 = m["sources"][0]
+    cols: dict[str, np.ndarray] = {"time_s": t}
+    inputs = duty(duty_kind, t, src0["ref"], rng)
+    used_inputs = {s["input"] for s in m["sources"]}
+    cols.update({k: v for k, v in inputs.items() if k in used_inputs})
+    amb = _ambient(t, rng, rng.uniform(19.0, 23.0))
+    cols["T_ambient"] = amb
+    cols.update(_side_columns(t, amb, cols["U_spindle_rpm"], rng))
+    # sensed nodes start at (noise-free) ambient: the machine starts cold
+    for nd in m["nodes"]:
+        if "sensor" in nd:
+            cols[nd["sensor"]] = np.full(len(t), amb[0])
+    source = (hp["node"], "T_hydraulic", hp["g"]) if hidden == "unmodeled_source" else None
+    sim = simulate_truth(m, cols, lag_s=hp.get("tau") if hidden == "thermal_lag" else None, source=source)
+    axis = m["drift"][0]["axis"]
+    e = sim["drift:lag"].copy()
+    if hidden == "ambient_coupling":
+        e += hp["k_amb"] * (amb - amb[0])
+    elif hidden == "speed_growth":
+        rpm = cols["U_spindle_rpm"]
+        e += hp["g"] * (rpm / src0["ref"]) ** 2 - hp["g"] * (rpm[0] / src0["ref"]) ** 2
+    elif hidden == "nonlinear_expansion":
+        rise = sim[hp["node"]] - sim[hp["node"]][0]
+        e += hp["q"] * rise**2
+    elif hidden == "periodic":
+        e += hp["amp"] * np.sin(2 * np.pi * t / hp["period_s"])
+    for nd in m["nodes"]:
+        if "sensor" in nd:
+            cols[nd["sensor"]] = sim[nd["name"]].copy()
+    if hidden == "sensor_drift":
+        cols[hp["column"]] = cols[hp["column"]] + hp["rate_k_per_h"] * t / 3600.0
+    if noise:
+        for name in list(cols):
+            if name.startswith("T_"):
+                cols[name] = cols[name] + rng.normal(0, 0.03, len(t))
+        e = e + rng.normal(0, 0.15, len(t))
+    cols[axis] = e
+    return cols
+
+
+def make_case(
+    topology: str,
+    hidden: str,
+    seed: int,
+    *,
+    train_duty: str = "stepped",
+    test_duty: str = "random",
+    hours: tuple[float, float] = (20.0, 12.0),
+    dt: float = 60.0,
+    noise: bool = True,
+) -> Case:
+    """A training run and a held-out run of a true ``topology`` machine hiding ``hidden``."""
+    if hidden not in HIDDEN:
+        raise ValueError(f"unknown hidden effect {hidden!r} (one of {HIDDEN})")
+    rng = np.random.default_rng(seed)
+    m = machine(topology)
+    nodes = [nd["name"] for nd in m["nodes"]]
+    drift = m["drift"][0]["um_per_k"]
+    strong = max(drift, key=lambda kk: abs(drift[kk]))
+    hp: dict[str, Any] = {}
+    column: str | None = None
+    if hidden == "thermal_lag":
+        hp = {"tau": float(rng.uniform(1200, 2400))}
+    elif hidden == "ambient_coupling":
+        hp = {"k_amb": float(rng.choice([-1, 1]) * rng.uniform(2.0, 3.5))}
+    elif hidden == "speed_growth":
+        hp = {"g": float(rng.choice([-1, 1]) * rng.uniform(3.0, 5.0))}
+    elif hidden == "unmodeled_source":
+        hp = {"node": strong, "g": float(rng.uniform(1.5, 3.0))}
+        column = "T_hydraulic"
+    elif hidden == "nonlinear_expansion":
+        sensed = [nd["name"] for nd in m["nodes"] if "sensor" in nd and nd["name"] in drift]
+        node = sensed[0]
+        hp = {"node": node, "q": float(np.sign(drift[node]) * rng.uniform(0.012, 0.02))}
+    elif hidden == "sensor_drift":
+        sensed = [nd for nd in m["nodes"] if "sensor" in nd]
+        pick = sensed[int(rng.integers(len(sensed)))]
+        column = pick["sensor"]
+        hp = {"column": column, "rate_k_per_h": float(rng.choice([-1, 1]) * rng.uniform(0.12, 0.2))}
+    elif hidden == "periodic":
+        hp = {"amp": float(rng.uniform(1.5, 2.5)), "period_s": float(rng.uniform(2400, 3600))}
+    train = _run(m, hidden, hp, train_duty, hours[0], dt, rng, noise=noise)
+    test = _run(m, hidden, hp, test_duty, hours[1], dt, rng, noise=noise)
+    nominal = _perturb(m, rng)
+    assert set(nodes) == {nd["name"] for nd in nominal["nodes"]}
+    params = {k: v for k, v in hp.items() if isinstance(v, float)}
+    return Case(topology, hidden, seed, column, params, train, test, m, nominal, axis=m["drift"][0]["axis"])
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(float(v))
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()) + " }"
+    raise TypeError(f"cannot write {type(v).__name__} to TOML")
+
+
+def to_toml(m: dict[str, Any]) -> str:
+    """Write a machine dict in the formats.md TOML layout."""
+    lines = []
+    for k, v in m.items():
+        if not isinstance(v, list):
+            lines.append(f"{k} = {_toml_value(v)}")
+    for table in ("nodes", "links", "sources", "drift"):
+        for entry in m.get(table, []):
+            lines.append("")
+            lines.append(f"[[{table}]]")
+            lines.extend(f"{k} = {_toml_value(v)}" for k, v in entry.items())
+    return "\n".join(lines) + "\n"
+
+
+def write_run_csv(path: Any, cols: dict[str, np.ndarray]) -> None:
+    """Write a run's columns as CSV (atomically)."""
+    from ._io import write_atomic
+
+    names = list(cols)
+    rows = [",".join(names)]
+    for i in range(len(cols["time_s"])):
+        rows.append(",".join(f"{cols[n][i]:.6g}" if n != "time_s" else f"{cols[n][i]:.1f}" for n in names))
+    write_atomic(path, "\n".join(rows) + "\n")
