@@ -10,6 +10,7 @@ pub mod kmeans;
 pub mod linalg;
 pub mod linear;
 pub mod metrics;
+pub mod optim;
 pub mod rbf;
 pub mod run;
 pub mod samples;
