@@ -1,0 +1,148 @@
+"""The diagnosis report: ``report.json``, the two machine TOMLs and ``report.html`` (a page a
+person reads: the verdict and its evidence first, then the plots, made with matplotlib and
+embedded in the page). Everything is rendered in memory first, then each file is written to a
+temporary name and renamed into place, so a failure leaves no half-written report."""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ._io import write_atomic
+
+
+def _png(fig: Any) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+    return base64.b64encode(buf.getvalue()).decode("ascii")
+
+
+def _plots(series: dict[str, Any], report: dict[str, Any]) -> list[tuple[str, str]]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = []
+    t = np.asarray(series["time_s"]) / 3600.0
+    axis = report["axis"]
+    meas, base, ext = (np.asarray(series[k]) for k in ("measured", "baseline", "extended"))
+    verdict = report["verdict"]
+    fig, ax = plt.subplots(figsize=(9, 3.6))
+    ax.plot(t, meas, ".", ms=2.5, color="0.35", label=f"measured {axis}")
+    ax.plot(t, base, "-", color="tab:red", lw=1.3, label="calibrated model (baseline)")
+    if verdict not in ("none", "unexplained"):
+        ax.plot(t, ext, "-", color="tab:green", lw=1.3, label=f"extended: {verdict}")
+    ax.set_xlabel("time on the held-out data (h)")
+    ax.set_ylabel("thermal error (µm)")
+    ax.legend(loc="best", fontsize=8)
+    ax.grid(alpha=0.3)
+    out.append(("Held-out run: measured error and the models", _png(fig)))
+
+    fig, ax = plt.subplots(figsize=(9, 3.2))
+    ax.plot(t, meas - base, "-", color="tab:red", lw=1, label=f"baseline residual (RMS {report['baseline']['rmse_um']:.2f} µm)")
+    if verdict not in ("none", "unexplained"):
+        ax.plot(t, meas - ext, "-", color="tab:green", lw=1,
+                label=f"extended residual (RMS {report['extended']['rmse_um']:.2f} µm)")
+    noise = report.get("noise_um")
+    if noise:
+        ax.axhspan(-2 * noise, 2 * noise, color="0.85", label=f"±2σ probe noise ({noise:.2f} µm)")
+    ax.axhline(0, color="0.3", lw=0.6)
+    ax.set_xlabel("time on the held-out data (h)")
+    ax.set_ylabel("residual (µm)")
+    ax.legend(loc="best", fontsize=8)
+    ax.grid(alpha=0.3)
+    out.append(("Residuals before and after the extension", _png(fig)))
+
+    cands = report.get("candidates", [])
+    if cands:
+        fig, ax = plt.subplots(figsize=(9, 0.45 * len(cands) + 1.2))
+        labels = [c["cause"] + (f" ({c['column']})" if c.get("column") else "") for c in cands]
+        gains = [c["gain_pct"] for c in cands]
+        colors = ["tab:green" if c["cause"] == verdict and c.get("column") == report.get("column") else "0.6" for c in cands]
+        ax.barh(labels[::-1], gains[::-1], color=colors[::-1])
+        ax.axvline(0, color="0.3", lw=0.6)
+        ax.set_xlabel("gain on the held-out data (%): 1 − RMS(extended)/RMS(baseline)")
+        ax.grid(alpha=0.3, axis="x")
+        out.append(("Every candidate cause, scored on the held-out data", _png(fig)))
+    extra = series.get("sensor")
+    if extra:
+        fig, ax = plt.subplots(figsize=(9, 3.2))
+        ax.plot(t, extra["baseline_residual"], color="tab:red", lw=1, label="baseline")
+        ax.plot(t, extra["extended_residual"], color="tab:green", lw=1, label="extended")
+        ax.set_ylabel(f"{extra['column']} residual (°C)")
+        ax.set_xlabel("time on the held-out data (h)")
+        ax.legend(fontsize=8)
+        ax.grid(alpha=0.3)
+        out.append((f"Temperature residual of {extra['column']}", _png(fig)))
+    return out
+
+
+def render_html(report: dict[str, Any], series: dict[str, Any]) -> str:
+    """The HTML page: verdict and evidence first, then the figures, then the table."""
+    esc = html.escape
+    verdict = report["verdict"]
+    col = f" — column <code>{esc(str(report['column']))}</code>" if report.get("column") else ""
+    rows = "".join(
+        f"<tr><td>{esc(c['cause'])}</td><td>{esc(str(c.get('column') or ''))}</td>"
+        f"<td>{c['gain_pct']:.1f}</td><td>{c['score']:.3f}</td><td>{c.get('delta_bic', float('nan')):.1f}</td>"
+        f"<td>{esc(json.dumps(c.get('parameters', {})))}</td></tr>"
+        for c in report.get("candidates", [])
+    )
+    figs = "".join(
+        f"<figure><img alt='{esc(title)}' src='data:image/png;base64,{png}'><figcaption>{esc(title)}</figcaption></figure>"
+        for title, png in _plots(series, report)
+    )
+    b, e = report["baseline"], report["extended"]
+    return f"""<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><title>thermerr diagnosis: {esc(verdict)}</title>
+<style>body{{font-family:system-ui,sans-serif;max-width:980px;margin:2em auto;padding:0 1em;color:#222}}
+.verdict{{font-size:1.6em;margin:.2em 0}} .evidence{{font-size:1.1em;background:#f4f6f8;padding:.8em;border-left:4px solid #2a7}}
+table{{border-collapse:collapse;font-size:.9em}} td,th{{border:1px solid #ccc;padding:.25em .6em;text-align:left}}
+figure{{margin:1.5em 0}} img{{max-width:100%}} figcaption{{color:#555;font-size:.9em}}</style></head><body>
+<p>thermerr diagnosis of <code>{esc(report.get('run', ''))}</code> against <code>{esc(report.get('machine', ''))}</code>, axis <b>{esc(report['axis'])}</b></p>
+<p class="verdict">Verdict: <b>{esc(verdict)}</b>{col}</p>
+<p class="evidence">{esc(report.get('evidence', ''))}</p>
+<table><tr><th></th><th>RMS (µm)</th><th>max |r| (µm)</th><th>band (µm)</th></tr>
+<tr><td>calibrated model (baseline)</td><td>{b['rmse_um']:.3f}</td><td>{b['max_abs_um']:.3f}</td><td>{b['band_um']:.3f}</td></tr>
+<tr><td>extended model</td><td>{e['rmse_um']:.3f}</td><td>{e['max_abs_um']:.3f}</td><td>{e['band_um']:.3f}</td></tr></table>
+<p>All figures are on data held out from calibration ({esc(report.get('holdout', ''))}). Gain: {report['gain_pct']:.1f} %.</p>
+{figs}
+<h2>Candidates</h2>
+<table><tr><th>cause</th><th>column</th><th>gain (%)</th><th>score</th><th>ΔBIC (train)</th><th>parameters</th></tr>{rows}</table>
+<p style="color:#777;font-size:.85em">calibrated.toml: the nominal model after calibration; extended.toml: calibrated plus the extension for the verdict.
+Both load back with <code>thermerr_rs.Machine.load</code> and simulate with the same code.</p>
+</body></html>
+"""
+
+
+def write_report(
+    out_dir: str | os.PathLike[str],
+    report: dict[str, Any],
+    series: dict[str, Any],
+    calibrated_toml: str,
+    extended_toml: str,
+) -> Path:
+    """Render everything, then write the four files (each atomically) into ``out_dir``."""
+    page = render_html(report, series)
+    doc = json.dumps(report, indent=1, allow_nan=False)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    for name, text in (
+        ("calibrated.toml", calibrated_toml),
+        ("extended.toml", extended_toml),
+        ("report.json", doc),
+        ("report.html", page),
+    ):
+        write_atomic(out / name, text)
+    return out / "report.html"
