@@ -112,7 +112,7 @@ where
         return Err(Error::Shape("least_squares: no parameters".into()));
     }
     for j in 0..n {
-        if !(lo[j] < hi[j]) || !lo[j].is_finite() || !hi[j].is_finite() || !x0[j].is_finite() {
+        if !lo[j].is_finite() || !hi[j].is_finite() || !x0[j].is_finite() || lo[j] >= hi[j] {
             return Err(Error::param(
                 "bounds",
                 format!(
