@@ -1,0 +1,7 @@
+//! The machine's lumped thermal network: model file, simulation, calibration.
+
+pub mod machine;
+pub mod sim;
+
+pub use machine::Machine;
+pub use sim::{simulate, Init, RunView, Simulation};

@@ -1,0 +1,449 @@
+//! Exact simulation of the lumped network: C dT/dt = G·(T_j − T_i) + G_a (T_amb − T) + Q(u),
+//! inputs and boundary temperatures held between samples, each step the exact solution
+//! x⁺ = Φ x + Γ f with Φ = e^{Mh} and Γ = ∫₀ʰ e^{Ms} ds (read off one matrix exponential of the
+//! augmented matrix [[M, I], [0, 0]]·h), cached per distinct step length.
+
+use std::collections::HashMap;
+
+use nalgebra::DMatrix;
+
+use super::machine::{Ambient, DriftSpec, Machine};
+use crate::error::{Error, Result};
+use crate::run::Run;
+
+/// Named columns of a run, borrowed.
+pub struct RunView<'a> {
+    pub source: String,
+    pub time: &'a [f64],
+    cols: HashMap<&'a str, &'a [f64]>,
+}
+
+impl<'a> RunView<'a> {
+    pub fn new(run: &'a Run) -> Self {
+        RunView {
+            source: run.source.clone(),
+            time: &run.time_s,
+            cols: run
+                .names
+                .iter()
+                .zip(&run.columns)
+                .map(|(n, c)| (n.as_str(), c.as_slice()))
+                .collect(),
+        }
+    }
+
+    pub fn col(&self, name: &str) -> Result<&'a [f64]> {
+        self.cols
+            .get(name)
+            .copied()
+            .ok_or_else(|| Error::MissingColumn {
+                file: self.source.clone(),
+                column: name.to_string(),
+                available: {
+                    let mut v: Vec<&str> = self.cols.keys().copied().collect();
+                    v.sort_unstable();
+                    v.join(", ")
+                },
+            })
+    }
+
+    pub fn has(&self, name: &str) -> bool {
+        self.cols.contains_key(name)
+    }
+
+    pub fn len(&self) -> usize {
+        self.time.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.time.is_empty()
+    }
+}
+
+/// Simulated node temperatures, sensor readings and drift axes.
+#[derive(Clone, Debug)]
+pub struct Simulation {
+    pub node_names: Vec<String>,
+    /// n_steps × n_nodes, row-major.
+    pub temps: Vec<f64>,
+    /// (column, predicted reading) per sensed node, in node order.
+    pub sensors: Vec<(String, Vec<f64>)>,
+    /// (axis, predicted error) per drift entry.
+    pub drift: Vec<(String, Vec<f64>)>,
+}
+
+impl Simulation {
+    pub fn node(&self, k: usize) -> Vec<f64> {
+        let n = self.node_names.len();
+        self.temps.chunks_exact(n).map(|r| r[k]).collect()
+    }
+}
+
+/// e^A by scaling and squaring with a Taylor polynomial (‖A/2^s‖ ≤ 1/2, 20 terms: truncation
+/// below 1e-20 relative), adequate for the small dense matrices of a thermal network.
+pub fn expm(a: &DMatrix<f64>) -> DMatrix<f64> {
+    let norm = a.iter().fold(0.0_f64, |m, v| m.max(v.abs())) * a.nrows() as f64;
+    let s = if norm > 0.5 {
+        (norm / 0.5).log2().ceil() as i32
+    } else {
+        0
+    };
+    let scaled = a / 2f64.powi(s);
+    let n = a.nrows();
+    let mut term = DMatrix::<f64>::identity(n, n);
+    let mut sum = term.clone();
+    for k in 1..=20 {
+        term = &term * &scaled / k as f64;
+        sum += &term;
+    }
+    for _ in 0..s {
+        sum = &sum * &sum;
+    }
+    sum
+}
+
+/// The network reduced to its simulated (non-boundary) nodes.
+struct Network {
+    dyn_nodes: Vec<usize>,
+    /// node index → position among dynamic nodes
+    pos: Vec<Option<usize>>,
+    m: DMatrix<f64>,
+    cap: Vec<f64>,
+    g_amb: Vec<f64>,
+    /// (dynamic position, boundary node index, conductance)
+    bnd_links: Vec<(usize, usize, f64)>,
+}
+
+fn network(mach: &Machine) -> Network {
+    let nn = mach.nodes.len();
+    let dyn_nodes: Vec<usize> = (0..nn)
+        .filter(|&i| mach.nodes[i].boundary.is_none())
+        .collect();
+    let mut pos = vec![None; nn];
+    for (p, &i) in dyn_nodes.iter().enumerate() {
+        pos[i] = Some(p);
+    }
+    let nd = dyn_nodes.len();
+    let cap: Vec<f64> = dyn_nodes
+        .iter()
+        .map(|&i| mach.nodes[i].capacity_j_per_k)
+        .collect();
+    let g_amb: Vec<f64> = dyn_nodes
+        .iter()
+        .map(|&i| mach.nodes[i].ambient_w_per_k)
+        .collect();
+    let mut m = DMatrix::<f64>::zeros(nd, nd);
+    let mut bnd_links = Vec::new();
+    for p in 0..nd {
+        m[(p, p)] -= g_amb[p];
+    }
+    for l in &mach.links {
+        let (Some(a), Some(b)) = (
+            mach.node_index(&l.between[0]),
+            mach.node_index(&l.between[1]),
+        ) else {
+            continue;
+        };
+        let g = l.w_per_k;
+        match (pos[a], pos[b]) {
+            (Some(pa), Some(pb)) => {
+                m[(pa, pb)] += g;
+                m[(pb, pa)] += g;
+                m[(pa, pa)] -= g;
+                m[(pb, pb)] -= g;
+            }
+            (Some(pa), None) => {
+                m[(pa, pa)] -= g;
+                bnd_links.push((pa, b, g));
+            }
+            (None, Some(pb)) => {
+                m[(pb, pb)] -= g;
+                bnd_links.push((pb, a, g));
+            }
+            (None, None) => {}
+        }
+    }
+    for p in 0..nd {
+        for q in 0..nd {
+            m[(p, q)] /= cap[p];
+        }
+    }
+    Network {
+        dyn_nodes,
+        pos,
+        m,
+        cap,
+        g_amb,
+        bnd_links,
+    }
+}
+
+/// How the simulated nodes start.
+#[derive(Clone, Debug, Default)]
+pub enum Init {
+    /// formats.md: a sensed node at its sensor's first reading (less its offset), an unsensed
+    /// node at the ambient's first reading.
+    #[default]
+    FirstReading,
+    /// As `FirstReading`, plus a per-node offset (K), e.g. fitted by calibration.
+    Offsets(Vec<f64>),
+}
+
+fn ambient_series<'a>(mach: &Machine, run: &RunView<'a>) -> Result<std::borrow::Cow<'a, [f64]>> {
+    Ok(match &mach.ambient {
+        Ambient::Column(c) => std::borrow::Cow::Borrowed(run.col(c)?),
+        Ambient::Constant(v) => std::borrow::Cow::Owned(vec![*v; run.len()]),
+    })
+}
+
+/// Simulates the machine over the run's time axis and inputs.
+pub fn simulate(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<Simulation> {
+    let temps = simulate_nodes(mach, run, init)?;
+    finish(mach, run, temps)
+}
+
+/// Node temperatures only (n_steps × n_nodes, row-major), boundary nodes included.
+pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<Vec<f64>> {
+    let n_t = run.len();
+    if n_t == 0 {
+        return Err(Error::Shape("cannot simulate an empty run".into()));
+    }
+    let t = run.time;
+    let nn = mach.nodes.len();
+    let net = network(mach);
+    let nd = net.dyn_nodes.len();
+    let amb = ambient_series(mach, run)?;
+    let bnd: Vec<Option<&[f64]>> = mach
+        .nodes
+        .iter()
+        .map(|n| n.boundary.as_deref().map(|c| run.col(c)).transpose())
+        .collect::<Result<_>>()?;
+    let srcs: Vec<(usize, &[f64], f64, f64, f64)> = mach
+        .sources
+        .iter()
+        .map(|s| {
+            let i = mach
+                .node_index(&s.node)
+                .ok_or_else(|| Error::Format(format!("unknown node {}", s.node)))?;
+            let p = net.pos[i]
+                .ok_or_else(|| Error::Format(format!("source on boundary node {}", s.node)))?;
+            Ok((p, run.col(&s.input)?, s.w, s.reference, s.exponent))
+        })
+        .collect::<Result<_>>()?;
+    let mut x: Vec<f64> = Vec::with_capacity(nd);
+    for (p, &i) in net.dyn_nodes.iter().enumerate() {
+        let node = &mach.nodes[i];
+        let mut v = match &node.sensor {
+            Some(c) => run.col(c)?[0] - node.sensor_offset_k,
+            None => amb[0],
+        };
+        if let Init::Offsets(off) = init {
+            v += off.get(i).copied().unwrap_or(0.0);
+        }
+        let _ = p;
+        x.push(v);
+    }
+    let mut out = vec![0.0; n_t * nn];
+    let mut cache: Vec<(u64, DMatrix<f64>, DMatrix<f64>)> = Vec::new();
+    let mut f = vec![0.0; nd];
+    let mut xn = vec![0.0; nd];
+    for k in 0..n_t {
+        let row = &mut out[k * nn..(k + 1) * nn];
+        for (p, &i) in net.dyn_nodes.iter().enumerate() {
+            row[i] = x[p];
+        }
+        for (i, b) in bnd.iter().enumerate() {
+            if let Some(col) = b {
+                row[i] = col[k];
+            }
+        }
+        if k + 1 == n_t {
+            break;
+        }
+        let h = t[k + 1] - t[k];
+        for p in 0..nd {
+            f[p] = net.g_amb[p] * amb[k];
+        }
+        for &(p, b, g) in &net.bnd_links {
+            f[p] += g * bnd[b].map_or(0.0, |c| c[k]);
+        }
+        for &(p, u, w, r, e) in &srcs {
+            let uk = u[k];
+            if uk > 0.0 {
+                f[p] += w * (uk / r).powf(e);
+            }
+        }
+        for p in 0..nd {
+            f[p] /= net.cap[p];
+        }
+        let key = h.to_bits();
+        let idx = match cache.iter().position(|(kk, _, _)| *kk == key) {
+            Some(i) => i,
+            None => {
+                let mut big = DMatrix::<f64>::zeros(2 * nd, 2 * nd);
+                big.view_mut((0, 0), (nd, nd)).copy_from(&net.m);
+                for p in 0..nd {
+                    big[(p, nd + p)] = 1.0;
+                }
+                let e = expm(&(big * h));
+                let phi = e.view((0, 0), (nd, nd)).into_owned();
+                let gam = e.view((0, nd), (nd, nd)).into_owned();
+                if cache.len() >= 64 {
+                    cache.remove(0);
+                }
+                cache.push((key, phi, gam));
+                cache.len() - 1
+            }
+        };
+        let (_, phi, gam) = &cache[idx];
+        for p in 0..nd {
+            let mut acc = 0.0;
+            for q in 0..nd {
+                acc += phi[(p, q)] * x[q] + gam[(p, q)] * f[q];
+            }
+            xn[p] = acc;
+        }
+        std::mem::swap(&mut x, &mut xn);
+    }
+    if out.iter().any(|v| !v.is_finite()) {
+        return Err(Error::Numerical(
+            "the simulation produced non-finite temperatures".into(),
+        ));
+    }
+    Ok(out)
+}
+
+/// Sensor readings and drift from node temperatures.
+pub fn finish(mach: &Machine, run: &RunView<'_>, temps: Vec<f64>) -> Result<Simulation> {
+    let nn = mach.nodes.len();
+    let t = run.time;
+    let mut sensors = Vec::new();
+    for (i, node) in mach.nodes.iter().enumerate() {
+        if let Some(c) = &node.sensor {
+            let r: Vec<f64> = temps
+                .chunks_exact(nn)
+                .zip(t)
+                .map(|(row, tk)| {
+                    row[i] + node.sensor_offset_k + node.sensor_drift_k_per_h * (tk - t[0]) / 3600.0
+                })
+                .collect();
+            sensors.push((c.clone(), r));
+        }
+    }
+    let mut drift = Vec::new();
+    for d in &mach.drift {
+        let terms = drift_terms(mach, d, run, &temps)?;
+        let mut thermal = vec![0.0; run.len()];
+        for (coef, series) in &terms.lagged {
+            for (a, b) in thermal.iter_mut().zip(series) {
+                *a += coef * b;
+            }
+        }
+        let mut e = match d.lag_s {
+            Some(tau) => lag(t, &thermal, tau),
+            None => thermal,
+        };
+        for (coef, series) in &terms.instant {
+            for (a, b) in e.iter_mut().zip(series) {
+                *a += coef * b;
+            }
+        }
+        drift.push((d.axis.clone(), e));
+    }
+    Ok(Simulation {
+        node_names: mach.nodes.iter().map(|n| n.name.clone()).collect(),
+        temps,
+        sensors,
+        drift,
+    })
+}
+
+/// The terms of one drift axis as (coefficient, series): `lagged` ones pass through the axis'
+/// lag (if any), `instant` ones do not. Every series is zero at t = 0.
+pub struct DriftTerms {
+    pub lagged: Vec<(f64, Vec<f64>)>,
+    pub instant: Vec<(f64, Vec<f64>)>,
+    pub labels_lagged: Vec<String>,
+    pub labels_instant: Vec<String>,
+}
+
+pub fn drift_terms(
+    mach: &Machine,
+    d: &DriftSpec,
+    run: &RunView<'_>,
+    temps: &[f64],
+) -> Result<DriftTerms> {
+    let nn = mach.nodes.len();
+    let rise = |i: usize| -> Vec<f64> {
+        let t0 = temps[i];
+        temps.chunks_exact(nn).map(|r| r[i] - t0).collect()
+    };
+    let mut out = DriftTerms {
+        lagged: Vec::new(),
+        instant: Vec::new(),
+        labels_lagged: Vec::new(),
+        labels_instant: Vec::new(),
+    };
+    for (name, k) in &d.um_per_k {
+        let i = mach
+            .node_index(name)
+            .ok_or_else(|| Error::Format(format!("unknown node {name}")))?;
+        out.lagged.push((*k, rise(i)));
+        out.labels_lagged.push(format!("um_per_k.{name}"));
+    }
+    for (name, q) in &d.quadratic_um_per_k2 {
+        let i = mach
+            .node_index(name)
+            .ok_or_else(|| Error::Format(format!("unknown node {name}")))?;
+        out.lagged
+            .push((*q, rise(i).iter().map(|v| v * v).collect()));
+        out.labels_lagged
+            .push(format!("quadratic_um_per_k2.{name}"));
+    }
+    if d.ambient_um_per_k != 0.0 {
+        let amb = ambient_series(mach, run)?;
+        out.lagged
+            .push((d.ambient_um_per_k, amb.iter().map(|v| v - amb[0]).collect()));
+        out.labels_lagged.push("ambient_um_per_k".into());
+    }
+    for c in &d.columns {
+        let col = run.col(&c.column)?;
+        out.lagged
+            .push((c.um_per_k, col.iter().map(|v| v - col[0]).collect()));
+        out.labels_lagged.push(format!("columns.{}", c.column));
+    }
+    for term in &d.inputs {
+        let u = run.col(&term.input)?;
+        let f = |v: f64| {
+            if v > 0.0 {
+                (v / term.reference).powf(term.exponent)
+            } else {
+                0.0
+            }
+        };
+        let u0 = f(u[0]);
+        out.instant
+            .push((term.um, u.iter().map(|v| f(*v) - u0).collect()));
+        out.labels_instant.push(format!("inputs.{}", term.input));
+    }
+    Ok(out)
+}
+
+/// First-order lag z' = (y − z)/τ, z(0) = y(0), exact for y linear between samples.
+pub fn lag(t: &[f64], y: &[f64], tau: f64) -> Vec<f64> {
+    let mut z = Vec::with_capacity(y.len());
+    let Some(&first) = y.first() else { return z };
+    z.push(first);
+    for k in 1..y.len() {
+        let h = t[k] - t[k - 1];
+        let a = (-h / tau).exp();
+        let w = if h > 0.0 {
+            1.0 - (tau / h) * (1.0 - a)
+        } else {
+            1.0
+        };
+        let prev = z[k - 1];
+        z.push(a * prev + (1.0 - a) * y[k - 1] + w * (y[k] - y[k - 1]));
+    }
+    z
+}

@@ -1,0 +1,236 @@
+//! The thermal network simulation against analytic and independent numerical solutions, and
+//! the machine file's validation.
+
+use approx::assert_relative_eq;
+use thermerr_core::run::{NanPolicy, Run};
+use thermerr_core::thermal::{simulate, Init, Machine, RunView};
+
+fn run(cols: Vec<(&str, Vec<f64>)>) -> Run {
+    let (names, columns): (Vec<String>, Vec<Vec<f64>>) =
+        cols.into_iter().map(|(n, c)| (n.to_string(), c)).unzip();
+    Run::from_columns("<test>", names, columns, NanPolicy::Error, None).unwrap()
+}
+
+const ONE_NODE: &str = r#"
+name = "one"
+ambient = "T_ambient"
+[[nodes]]
+name = "a"
+capacity_j_per_k = 1000.0
+ambient_w_per_k = 2.0
+sensor = "T_a"
+[[sources]]
+node = "a"
+input = "U_rpm"
+w = 50.0
+ref = 1000.0
+exponent = 1.0
+[[drift]]
+axis = "E_z"
+um_per_k = { a = 3.0 }
+"#;
+
+#[test]
+fn one_node_step_response_is_exact() {
+    let m = Machine::from_toml(ONE_NODE, "one.toml").unwrap();
+    // coarse, irregular sampling: the discretisation is exact anyway
+    let t = vec![0.0, 10.0, 250.0, 600.0, 601.0, 3000.0];
+    let n = t.len();
+    let r = run(vec![
+        ("time_s", t.clone()),
+        ("T_ambient", vec![20.0; n]),
+        ("T_a", vec![20.0; n]),
+        ("U_rpm", vec![1000.0; n]),
+        ("E_z", vec![0.0; n]),
+    ]);
+    let s = simulate(&m, &RunView::new(&r), &Init::FirstReading).unwrap();
+    let e = &s.drift[0].1;
+    for (k, tk) in t.iter().enumerate() {
+        let rise = 50.0 / 2.0 * (1.0 - (-2.0 * tk / 1000.0).exp());
+        assert_relative_eq!(s.temps[k], 20.0 + rise, epsilon = 1e-10);
+        assert_relative_eq!(e[k], 3.0 * rise, epsilon = 1e-9);
+    }
+}
+
+const TWO_NODES: &str = r#"
+name = "two"
+ambient = 21.0
+[[nodes]]
+name = "hot"
+capacity_j_per_k = 800.0
+ambient_w_per_k = 0.5
+sensor = "T_hot"
+[[nodes]]
+name = "cold"
+capacity_j_per_k = 5000.0
+ambient_w_per_k = 3.0
+[[links]]
+between = ["hot", "cold"]
+w_per_k = 4.0
+[[sources]]
+node = "hot"
+input = "U_rpm"
+w = 40.0
+ref = 6000.0
+exponent = 1.4
+[[drift]]
+axis = "E_x"
+um_per_k = { hot = 1.0, cold = 2.0 }
+"#;
+
+fn rk4(t: &[f64], rpm: &[f64]) -> Vec<[f64; 2]> {
+    let q = |u: f64| {
+        if u > 0.0 {
+            40.0 * (u / 6000.0f64).powf(1.4)
+        } else {
+            0.0
+        }
+    };
+    let f = |x: [f64; 2], u: f64| {
+        [
+            (4.0 * (x[1] - x[0]) + 0.5 * (21.0 - x[0]) + q(u)) / 800.0,
+            (4.0 * (x[0] - x[1]) + 3.0 * (21.0 - x[1])) / 5000.0,
+        ]
+    };
+    let mut x = [20.0, 21.0];
+    let mut out = vec![x];
+    for k in 0..t.len() - 1 {
+        let steps = 2000;
+        let h = (t[k + 1] - t[k]) / steps as f64;
+        for _ in 0..steps {
+            let k1 = f(x, rpm[k]);
+            let k2 = f([x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]], rpm[k]);
+            let k3 = f([x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]], rpm[k]);
+            let k4 = f([x[0] + h * k3[0], x[1] + h * k3[1]], rpm[k]);
+            x = [
+                x[0] + h / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
+                x[1] + h / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
+            ];
+        }
+        out.push(x);
+    }
+    out
+}
+
+#[test]
+fn two_nodes_match_fine_rk4_and_irregular_steps() {
+    let m = Machine::from_toml(TWO_NODES, "two.toml").unwrap();
+    let t: Vec<f64> = (0..40)
+        .map(|k| k as f64 * 300.0 + if k % 3 == 1 { 37.0 } else { 0.0 })
+        .collect();
+    let rpm: Vec<f64> = (0..40)
+        .map(|k| [0.0, 3000.0, 6000.0, 4500.0][(k / 10) % 4])
+        .collect();
+    let mut hot = vec![0.0; 40];
+    hot[0] = 20.0;
+    let r = run(vec![
+        ("time_s", t.clone()),
+        ("T_hot", hot),
+        ("U_rpm", rpm.clone()),
+        ("E_x", vec![0.0; 40]),
+    ]);
+    let s = simulate(&m, &RunView::new(&r), &Init::FirstReading).unwrap();
+    let reference = rk4(&t, &rpm);
+    for (k, x) in reference.iter().enumerate() {
+        // RK4 with h ≤ 0.17 s: global error far below 1e-8 K
+        assert_relative_eq!(s.temps[2 * k], x[0], epsilon = 1e-8);
+        assert_relative_eq!(s.temps[2 * k + 1], x[1], epsilon = 1e-8);
+    }
+}
+
+#[test]
+fn coarse_and_fine_sampling_agree_on_shared_instants() {
+    let m = Machine::from_toml(TWO_NODES, "two.toml").unwrap();
+    let mk = |step: usize| {
+        let t: Vec<f64> = (0..=3600).step_by(step).map(|v| v as f64).collect();
+        let n = t.len();
+        let mut hot = vec![0.0; n];
+        hot[0] = 20.0;
+        run(vec![
+            ("time_s", t),
+            ("T_hot", hot),
+            ("U_rpm", vec![5000.0; n]),
+            ("E_x", vec![0.0; n]),
+        ])
+    };
+    let (fine, coarse) = (mk(1), mk(600));
+    let sf = simulate(&m, &RunView::new(&fine), &Init::FirstReading).unwrap();
+    let sc = simulate(&m, &RunView::new(&coarse), &Init::FirstReading).unwrap();
+    for k in 0..coarse.len() {
+        assert_relative_eq!(sc.temps[2 * k], sf.temps[2 * 600 * k], epsilon = 1e-9);
+        assert_relative_eq!(sc.drift[0].1[k], sf.drift[0].1[600 * k], epsilon = 1e-9);
+    }
+}
+
+#[test]
+fn toml_round_trip_simulates_identically() {
+    let mut m = Machine::from_toml(TWO_NODES, "two.toml").unwrap();
+    m.drift[0].lag_s = Some(900.0);
+    m.drift[0].ambient_um_per_k = 1.5;
+    m.drift[0].quadratic_um_per_k2.insert("hot".into(), 0.01);
+    m.nodes[0].sensor_drift_k_per_h = 0.1;
+    let text = m.to_toml().unwrap();
+    let back = Machine::from_toml(&text, "back.toml").unwrap();
+    assert_eq!(m, back);
+}
+
+#[test]
+fn lag_reaches_63_percent_at_tau() {
+    let t: Vec<f64> = (0..=100).map(|k| k as f64 * 10.0).collect();
+    let mut y = vec![1.0; t.len()];
+    y[0] = 0.0;
+    // a step at t = 0⁺ (the ramp over the first 10 s is what the sampled input can say)
+    let z = thermerr_core::thermal::sim::lag(&t, &y, 500.0);
+    let at_tau = z[50 + 1 - 1];
+    assert!((at_tau - (1.0 - (-1.0f64).exp())).abs() < 0.01, "{at_tau}");
+}
+
+fn err(text: &str) -> String {
+    Machine::from_toml(text, "m.toml").unwrap_err().to_string()
+}
+
+#[test]
+fn validation_names_the_entry() {
+    let e = err(&ONE_NODE.replace("node = \"a\"", "node = \"b\""));
+    assert!(
+        e.contains("m.toml") && e.contains("sources[0]") && e.contains("unknown node `b`"),
+        "{e}"
+    );
+    let e = err(&ONE_NODE.replace("capacity_j_per_k = 1000.0", "capacity_j_per_k = 0.0"));
+    assert!(e.contains("nodes[0] `a`") && e.contains("capacity"), "{e}");
+    let e = err(&TWO_NODES.replace("w_per_k = 4.0", "w_per_k = -4.0"));
+    assert!(e.contains("links[0]") && e.contains(">= 0"), "{e}");
+    let e = err(&TWO_NODES.replace("name = \"cold\"", "name = \"hot\""));
+    assert!(e.contains("duplicate node name"), "{e}");
+    let e = err(&TWO_NODES
+        .replace("ambient_w_per_k = 3.0", "ambient_w_per_k = 0.0")
+        .replace("ambient_w_per_k = 0.5", ""));
+    assert!(e.contains("singular"), "{e}");
+    let e = err(&TWO_NODES.replace(
+        "between = [\"hot\", \"cold\"]",
+        "between = [\"hot\", \"hot\"]",
+    ));
+    assert!(e.contains("two different nodes"), "{e}");
+    let e = err(&ONE_NODE.replace("ref = 1000.0", "ref = 0.0"));
+    assert!(e.contains("ref must be > 0"), "{e}");
+    let e = err("name = \"x\"\nambient = 20.0\nnodes = [ { name = \"a\", capacity_j_per_k = 1.0, ambient_w_per_k = 1.0, sensr = \"T\" } ]\n");
+    assert!(e.contains("sensr"), "{e}");
+    let e = err("name = \"x\"\nambient = 20.0\n[[nodes]\n");
+    assert!(e.contains("line 3"), "{e}");
+}
+
+#[test]
+fn missing_run_column_names_the_entry() {
+    let m = Machine::from_toml(ONE_NODE, "one.toml").unwrap();
+    let r = run(vec![
+        ("time_s", vec![0.0, 1.0]),
+        ("T_ambient", vec![20.0, 20.0]),
+        ("T_a", vec![20.0, 20.0]),
+    ]);
+    let v = RunView::new(&r);
+    let e = m
+        .check_columns("one.toml", "<test>", |c| v.has(c))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("U_rpm") && e.contains("sources[0]"), "{e}");
+}
