@@ -231,7 +231,7 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         })
         .collect::<Result<_>>()?;
     let mut x: Vec<f64> = Vec::with_capacity(nd);
-    for (p, &i) in net.dyn_nodes.iter().enumerate() {
+    for &i in &net.dyn_nodes {
         let node = &mach.nodes[i];
         let mut v = match &node.sensor {
             Some(c) => run.col(c)?[0] - node.sensor_offset_k,
@@ -240,7 +240,6 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         if let Init::Offsets(off) = init {
             v += off.get(i).copied().unwrap_or(0.0);
         }
-        let _ = p;
         x.push(v);
     }
     let mut out = vec![0.0; n_t * nn];
@@ -261,8 +260,8 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
             break;
         }
         let h = t[k + 1] - t[k];
-        for p in 0..nd {
-            f[p] = net.g_amb[p] * amb[k];
+        for (fp, g) in f.iter_mut().zip(&net.g_amb) {
+            *fp = g * amb[k];
         }
         for &(p, b, g) in &net.bnd_links {
             f[p] += g * bnd[b].map_or(0.0, |c| c[k]);
@@ -273,8 +272,8 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
                 f[p] += w * (uk / r).powf(e);
             }
         }
-        for p in 0..nd {
-            f[p] /= net.cap[p];
+        for (fp, c) in f.iter_mut().zip(&net.cap) {
+            *fp /= c;
         }
         let key = h.to_bits();
         let idx = match cache.iter().position(|(kk, _, _)| *kk == key) {
