@@ -1,4 +1,4 @@
-"""Fuzzy c-means clustering (Bezdek), in Rust."""
+"""Fuzzy c-means clustering (Bezdek), the clustering step of seed 003's sensor selection."""
 
 from __future__ import annotations
 
@@ -11,29 +11,38 @@ import numpy.typing as npt
 from . import _core
 from ._arrays import F64, as_matrix
 from .base import Estimator
+from .errors import ParameterError
+
+I64 = npt.NDArray[np.int64]
 
 
 class FuzzyCMeans(Estimator):
-    """Fuzzy c-means: each row of ``X`` is one object (for sensor selection: one sensor's
-    min–max-scaled time series).
+    """Fuzzy c-means: every object (a row of ``X``) belongs to every cluster with a membership
+    in [0, 1], the memberships of an object summing to 1.
 
-    Minimises J_m(U, V) = Σ_k Σ_i u_ik^m ‖x_k − v_i‖² by Bezdek's alternating updates, the same
-    iteration as scikit-fuzzy's ``cmeans`` (memberships normalised and floored at machine epsilon,
-    distances floored at epsilon so an object on a centre gets membership 1 there). Stops when the
-    Frobenius norm of the change of the partition is below ``tol``, or after ``max_iter``.
+    Minimises J_m = Σ_k Σ_i u_ik^m ‖x_k − v_i‖² by Bezdek's alternating updates. The loop is
+    scikit-fuzzy's ``skfuzzy.cluster.cmeans`` step for step (memberships normalised and clipped
+    at machine epsilon before the centre update, distances clipped at epsilon, stop when the
+    Frobenius norm of the membership change is below ``tol``), so with the same initial partition
+    both give the same numbers. Note the layouts: scikit-fuzzy takes data as features × objects
+    and memberships as clusters × objects; here rows are objects in both.
 
-    Parameters
-    ----------
-    n_clusters : number of clusters c (2 ≤ c ≤ number of objects).
-    m : weighting exponent, > 1.
-    tol : stopping threshold on ‖U⁽ᵇ⁺¹⁾ − U⁽ᵇ⁾‖_F.
-    max_iter : iteration cap.
-    seed : seed of the random initial partition (same seed, same result).
-    init : optional initial partition, n_objects × n_clusters (rows are normalised).
+    Parameters (keyword-only):
+        n_clusters: number of clusters, 2 ≤ n_clusters ≤ number of objects.
+        m: weighting exponent (fuzziness), > 1; 2 is the usual choice (seed 003).
+        tol: stop when ‖U_new − U_old‖_F < tol.
+        max_iter: at most this many iterations (``converged_`` tells whether tol was met).
+        seed: seed of the random initial partition (ChaCha8; not numpy's stream, so it does not
+            reproduce scikit-fuzzy's random start: pass ``init`` for that).
+        init: initial partition, n_objects × n_clusters, non-negative, rows summing to 1.
 
-    Fitted attributes: ``centers_`` (c × n_features), ``membership_`` (n_objects × c),
-    ``labels_`` (largest membership), ``n_iter_``, ``converged_``, ``objective_`` (last J_m),
-    ``objective_history_``.
+    Fitted attributes: ``centers_`` (n_clusters × n_features), ``membership_`` (n_objects ×
+    n_clusters), ``labels_`` (largest membership, first on ties), ``n_iter_`` (iterations run,
+    the last one included), ``objective_`` (J_m of the last iteration), ``history_`` (J_m per
+    iteration), ``converged_``.
+
+    A point lying on a centre gets membership 1.0 there (its other memberships are below 1e-30,
+    not exactly 0), never a division by zero.
     """
 
     kind = "fcm"
@@ -41,7 +50,7 @@ class FuzzyCMeans(Estimator):
     def __init__(
         self,
         *,
-        n_clusters: int = 4,
+        n_clusters: int,
         m: float = 2.0,
         tol: float = 1e-5,
         max_iter: int = 1000,
@@ -56,51 +65,101 @@ class FuzzyCMeans(Estimator):
         self.init = init
         self._inner: _core.FcmModel | None = None
 
-    def fit(self, X: Any, y: Any = None) -> FuzzyCMeans:
+    def fit(self, X: Any, y: Any = None) -> FuzzyCMeans:  # type: ignore[override]
+        """Cluster the rows of ``X``; ``y`` is ignored (scikit-learn convention)."""
+        names = list(map(str, X.columns)) if hasattr(X, "columns") else None
         x = as_matrix(X)
-        init = None if self.init is None else as_matrix(self.init, "init")
+        self._fit(x, None)
+        self.n_features_in_ = x.shape[1]
+        self.feature_names_in_ = names or None
+        self.target_name_ = None
+        return self
+
+    def _fit(self, x: F64, y: Any) -> None:
+        init = None
+        if self.init is not None:
+            try:
+                init = np.require(np.asarray(self.init, dtype=np.float64), np.float64, ["C", "A"])
+            except (TypeError, ValueError) as e:
+                raise ParameterError(f"init must be a numeric matrix: {e}") from None
+            if init.ndim != 2:
+                raise ParameterError(f"init must be 2-D (n_objects x n_clusters), got shape {init.shape}")
+        for name in ("n_clusters", "max_iter"):
+            v = getattr(self, name)
+            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
+                raise ParameterError(f"{name} must be a non-negative integer, got {v!r}")
+        seed = self.seed
+        if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0):
+            raise ParameterError(f"seed must be a non-negative integer or None, got {seed!r}")
         self._inner = _core.FcmModel.fit(
             x,
             n_clusters=int(self.n_clusters),
             m=float(self.m),
             tol=float(self.tol),
             max_iter=int(self.max_iter),
-            seed=None if self.seed is None else int(self.seed),
+            seed=None if seed is None else int(seed),
             init=init,
         )
-        self.n_features_in_ = x.shape[1]
-        return self
 
-    def _predict(self, x: F64) -> npt.NDArray[np.intp]:  # type: ignore[override]
-        return np.argmax(self.predict_membership(x), axis=1)
+    def predict(self, X: Any) -> I64:  # type: ignore[override]
+        """Hard labels of new objects (cluster of largest membership)."""
+        return self._model().predict(as_matrix(X))
 
     def predict_membership(self, X: Any) -> F64:
-        """Memberships of new objects to the fitted centres."""
+        """Memberships of new objects to the fitted centres (n × n_clusters), as
+        scikit-fuzzy's ``cmeans_predict`` gives them."""
+        return self._model().predict_membership(as_matrix(X))
+
+    def score(self, X: Any, y: Any = None) -> float:
+        """Minus J_m of ``X`` under the fitted centres and its predicted memberships
+        (higher is better, as scikit-learn's ``KMeans.score``)."""
+        x = as_matrix(X)
+        u = self.predict_membership(x)
+        c = self.centers_
+        d2 = np.stack([((x - ci) ** 2).sum(axis=1) for ci in c], axis=1)
+        return -float((u ** float(self.m) * d2).sum())
+
+    def _model(self) -> _core.FcmModel:
         self._check_fitted()
         assert self._inner is not None
-        return self._inner.predict_membership(as_matrix(X))
+        return self._inner
 
-    def _get(self, name: str) -> Any:
-        self._check_fitted()
-        return getattr(self._inner, name)
+    @property
+    def centers_(self) -> F64:
+        return self._model().centers
 
-    centers_ = property(lambda self: self._get("centers"))
-    membership_ = property(lambda self: self._get("membership"))
-    labels_ = property(lambda self: np.asarray(self._get("labels"), dtype=np.intp))
-    n_iter_ = property(lambda self: self._get("n_iter"))
-    converged_ = property(lambda self: self._get("converged"))
-    objective_ = property(lambda self: self._get("objective"))
-    objective_history_ = property(lambda self: self._get("objective_history"))
+    @property
+    def membership_(self) -> F64:
+        return self._model().membership
+
+    @property
+    def labels_(self) -> I64:
+        return self._model().labels
+
+    @property
+    def n_iter_(self) -> int:
+        return self._model().n_iter
+
+    @property
+    def objective_(self) -> float:
+        return self._model().objective
+
+    @property
+    def history_(self) -> F64:
+        return self._model().history
+
+    @property
+    def converged_(self) -> bool:
+        return self._model().converged
 
     def get_params(self, deep: bool = True) -> dict[str, Any]:
         p = super().get_params(deep)
-        if p["init"] is not None:
-            p["init"] = np.asarray(p["init"], dtype=np.float64).tolist()
+        if isinstance(p["init"], np.ndarray):
+            p["init"] = p["init"].tolist()
         return p
 
     def _state(self) -> dict[str, Any]:
-        assert self._inner is not None
-        state: dict[str, Any] = json.loads(self._inner.to_json())
+        state: dict[str, Any] = json.loads(self._model().to_json())
         return state
 
     def _restore(self, state: dict[str, Any]) -> None:

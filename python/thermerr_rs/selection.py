@@ -1,9 +1,16 @@
-"""Sensor selection by fuzzy c-means (seed 003, Su et al. 2011)."""
+"""Temperature-sensor selection by fuzzy c-means (seed 003, Su et al. 2011).
+
+Each temperature series, min–max scaled to [0, 1], is one object; fuzzy c-means groups the
+series that move together; the partition is hardened by the largest membership; in each
+cluster the sensor whose Pearson correlation with the thermal error is largest in magnitude is
+kept. Sensors in one cluster carry nearly the same information, so one per cluster gives a
+small, weakly coupled set of model inputs.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -11,112 +18,180 @@ import numpy as np
 from ._arrays import F64
 from .errors import DataError, ParameterError
 from .fcm import FuzzyCMeans
-from .run import Run
 
 
-@dataclass(frozen=True)
+@dataclass
 class SensorSelection:
     """Result of :func:`select_sensors`.
 
-    ``selected``: the chosen column per cluster, in cluster order. ``clusters``: cluster → its
-    sensors. ``correlations``: sensor → Pearson ρ with the error. ``membership``: sensors ×
-    clusters. ``sensors``: the candidate columns in the order of ``membership``'s rows.
+    ``selected``: the kept sensor per cluster, in cluster order (empty clusters keep none).
+    ``clusters``: {cluster index: sensor names}, hardened by the largest membership.
+    ``correlations``: {sensor: Pearson ρ with the error} (signed; selection uses |ρ|).
+    ``membership``: n_sensors × n_clusters fuzzy partition, rows in ``sensors`` order.
+    ``axis``: the error column, or the list of columns combined into a composite error.
+    ``weights``: {error column: weight in the composite} ({axis: 1.0} for one axis).
+    ``model``: the fitted :class:`FuzzyCMeans` (objects = sensors).
     """
 
-    axis: str
-    sensors: list[str]
     selected: list[str]
     clusters: dict[int, list[str]]
     correlations: dict[str, float]
     membership: F64
-    labels: list[int]
+    axis: str | list[str]
+    sensors: list[str] = field(default_factory=list)
+    weights: dict[str, float] = field(default_factory=dict)
+    model: FuzzyCMeans | None = field(default=None, repr=False)
+
+    @property
+    def labels(self) -> dict[str, int]:
+        """{sensor: hardened cluster index}."""
+        return {s: k for k, names in self.clusters.items() for s in names}
 
     def __str__(self) -> str:
-        head = f"{'sensor':<16} {'cluster':>7} {'membership':>10} {'rho':>8}  selected"
-        lines = [f"error: {self.axis}", head, "-" * len(head)]
-        order = sorted(range(len(self.sensors)), key=lambda k: (self.labels[k], -abs(self.correlations[self.sensors[k]])))
+        if isinstance(self.axis, str):
+            target = self.axis
+        else:
+            target = "composite of " + ", ".join(f"{a} ({self.weights.get(a, 0.0):.3f})" for a in self.axis)
+        labels = self.labels
+        width = max([len("sensor")] + [len(s) for s in self.sensors])
+        lines = [
+            f"sensor selection: {len(self.sensors)} sensors -> {len(self.selected)}, "
+            f"{self.membership.shape[1]} clusters, error = {target}",
+            f"{'sensor':<{width}}  cluster  membership      rho  selected",
+        ]
+        order = sorted(range(len(self.sensors)), key=lambda k: (labels[self.sensors[k]], k))
         for k in order:
-            name = self.sensors[k]
-            mark = "  *" if name in self.selected else ""
+            s = self.sensors[k]
+            c = labels[s]
+            mark = "*" if s in self.selected else ""
             lines.append(
-                f"{name:<16} {self.labels[k] + 1:>7} {self.membership[k, self.labels[k]]:>10.3f} "
-                f"{self.correlations[name]:>8.4f}{mark}"
+                f"{s:<{width}}  {c:>7d}  {self.membership[k, c]:>10.4f}  {self.correlations[s]:>7.4f}  {mark:^8}"
             )
-        lines.append(f"selected: {', '.join(self.selected)}")
+        lines.append("selected: " + ", ".join(self.selected))
         return "\n".join(lines)
 
 
-def pick_per_cluster(labels: Sequence[int], correlations: Sequence[float]) -> dict[int, int]:
-    """Seed 003's rule: in each cluster, the member whose |ρ| with the error is largest.
+def pick_per_cluster(
+    labels: Sequence[int] | Mapping[Any, int],
+    correlations: Sequence[float] | Mapping[Any, float],
+    names: Sequence[Any] | None = None,
+) -> list[Any]:
+    """The pure selection step: in each cluster (ascending label), the member with the largest
+    |correlation|; on a tie, the first one in order.
 
-    Returns cluster → index of the chosen member (ties: the first in order).
+    ``labels`` and ``correlations`` are either sequences aligned with ``names`` (default: the
+    indices 0..n-1) or mappings from name to value (then ``names`` defaults to the keys of
+    ``labels``, in order). Returns one name per non-empty cluster.
     """
-    if len(labels) != len(correlations):
-        raise ParameterError("labels and correlations differ in length")
+    if isinstance(labels, Mapping):
+        keys = list(labels) if names is None else list(names)
+        lab = [int(labels[k]) for k in keys]
+    else:
+        lab = [int(v) for v in labels]
+        keys = list(range(len(lab))) if names is None else list(names)
+    if isinstance(correlations, Mapping):
+        rho = [float(correlations[k]) for k in keys]
+    else:
+        rho = [float(v) for v in correlations]
+    if not (len(lab) == len(rho) == len(keys)):
+        raise ParameterError(
+            f"labels ({len(lab)}), correlations ({len(rho)}) and names ({len(keys)}) differ in length"
+        )
+    if any(not np.isfinite(r) for r in rho):
+        raise DataError("a correlation is not finite")
     best: dict[int, int] = {}
-    for k, (lab, rho) in enumerate(zip(labels, correlations)):
-        if lab not in best or abs(rho) > abs(correlations[best[lab]]):
-            best[lab] = k
-    return dict(sorted(best.items()))
+    for k, c in enumerate(lab):
+        if c not in best or abs(rho[k]) > abs(rho[best[c]]):
+            best[c] = k
+    return [keys[best[c]] for c in sorted(best)]
 
 
-def _error_series(run: Run, axis: str | Sequence[str]) -> tuple[str, F64]:
-    if isinstance(axis, str):
-        return axis, np.asarray(run[axis], dtype=np.float64)
-    names = list(axis)
-    if not names:
+def _pearson(a: F64, b: F64) -> float:
+    a = a - a.mean()
+    b = b - b.mean()
+    return float((a @ b) / np.sqrt((a @ a) * (b @ b)))
+
+
+def _error_target(run: Any, axis: str | Sequence[str]) -> tuple[F64, dict[str, float], str | list[str]]:
+    axes = [axis] if isinstance(axis, str) else list(axis)
+    if not axes:
         raise ParameterError("axis: give an E_* column or a list of them")
-    cols = np.column_stack([run[a] for a in names])
-    # composite error: the resultant displacement (Euclidean norm of the axes' errors), the
-    # magnitude that seed 003 correlates against when it combines X, Y and Z
-    return "|" + ",".join(names) + "|", np.sqrt(np.sum(cols**2, axis=1))
+    cols = []
+    for a in axes:
+        col = np.asarray(run[a], dtype=np.float64)  # MissingColumnError names an unknown column
+        if not str(a).startswith("E_"):
+            raise ParameterError(f"axis {a!r} is not an error column (E_*)")
+        if not np.all(np.isfinite(col)):
+            raise DataError(f"error column `{a}` holds a non-finite value")
+        if np.ptp(col) == 0:
+            raise DataError(f"error column `{a}` is constant; it cannot be correlated")
+        cols.append(col)
+    if len(axes) == 1:
+        return cols[0], {axes[0]: 1.0}, axis if isinstance(axis, str) else axes
+    rms = np.array([np.sqrt(np.mean(c**2)) for c in cols])
+    w = rms / rms.sum()
+    target = np.sum([wi * np.abs(c) for wi, c in zip(w, cols)], axis=0)
+    return target, {a: float(wi) for a, wi in zip(axes, w)}, axes
 
 
 def select_sensors(
-    run: Run,
+    run: Any,
     axis: str | Sequence[str],
     n_clusters: int = 4,
-    seed: int | None = 0,
-    *,
+    seed: int = 0,
     m: float = 2.0,
     sensors: Sequence[str] | None = None,
-    tol: float = 1e-5,
-    max_iter: int = 1000,
 ) -> SensorSelection:
-    """Seed 003's procedure: each temperature series, min–max scaled to [0, 1], is one object;
-    fuzzy c-means groups them into ``n_clusters``; each sensor goes to its cluster of largest
-    membership; in each cluster the sensor whose |Pearson ρ| with the error is largest is kept.
+    """Seed 003's sensor selection on a :class:`thermerr_rs.Run`.
 
-    ``axis``: an ``E_*`` column, or a list of them for a composite error (their Euclidean norm).
-    ``sensors``: candidate columns (default: every ``T_*`` column of the run).
+    ``axis``: an ``E_*`` column, or a list of them for a composite error. Seed 003 correlated
+    with a composite of X, Y and Z "combined by their shares"; here the composite is
+    e(t) = Σ_a w_a |E_a(t)| with w_a = RMS(E_a) / Σ_b RMS(E_b): each axis weighted by its share
+    of the total error, magnitudes so that axes with opposite sign conventions do not cancel
+    (errors are measured from the run's start, so |E_a| is the drift's size). For one axis the
+    signed series is used as is. The weights are in ``SensorSelection.weights``.
+
+    ``sensors``: the ``T_*`` columns to choose from (default: all of the run's).
+    ``n_clusters``, ``m``, ``seed``: fuzzy c-means parameters (seed 003: 4 clusters, m = 2).
+
+    Errors: an unknown column → MissingColumnError naming it; fewer sensors than clusters →
+    ParameterError; a constant series (zero range, cannot be scaled) → DataError naming it.
     """
-    label, err = _error_series(run, axis)
-    names = list(sensors) if sensors is not None else run.temperatures
-    if len(names) < n_clusters:
-        raise ParameterError(f"{len(names)} sensors cannot form {n_clusters} clusters")
+    names = list(run.temperatures) if sensors is None else [str(s) for s in sensors]
+    if isinstance(n_clusters, bool) or not isinstance(n_clusters, (int, np.integer)):
+        raise ParameterError(f"n_clusters must be an integer, got {n_clusters!r}")
+    if len(names) < max(int(n_clusters), 2):
+        raise ParameterError(
+            f"{len(names)} sensors cannot form {n_clusters} clusters (need at least as many sensors as clusters)"
+        )
+    if len(set(names)) != len(names):
+        raise ParameterError("sensors: a column is listed twice")
+    target, weights, axis_out = _error_target(run, axis)
     series = []
-    for name in names:
-        s = np.asarray(run[name], dtype=np.float64)
-        lo, hi = s.min(), s.max()
-        if hi - lo <= 0:
-            raise DataError(f"{run.source}: column `{name}` is constant; it cannot be clustered")
-        series.append((s - lo) / (hi - lo))
-    x = np.ascontiguousarray(np.vstack(series))
-    if np.ptp(err) <= 0:
-        raise DataError(f"{run.source}: the error {label} is constant; nothing to correlate with")
-    rho = [float(np.corrcoef(run[n], err)[0, 1]) for n in names]
-    fcm = FuzzyCMeans(n_clusters=n_clusters, m=m, tol=tol, max_iter=max_iter, seed=seed).fit(x)
-    labels = [int(v) for v in fcm.labels_]
-    chosen = pick_per_cluster(labels, rho)
-    clusters: Mapping[int, list[str]] = {
-        c: [names[k] for k in range(len(names)) if labels[k] == c] for c in sorted(set(labels))
-    }
+    for s in names:
+        col = np.asarray(run[s], dtype=np.float64)
+        if not np.all(np.isfinite(col)):
+            raise DataError(f"sensor column `{s}` holds a non-finite value")
+        lo, hi = float(col.min()), float(col.max())
+        if hi == lo:
+            raise DataError(f"sensor column `{s}` is constant ({lo}); it cannot be min-max scaled")
+        series.append((col - lo) / (hi - lo))
+    objects = np.ascontiguousarray(np.vstack(series))
+    model = FuzzyCMeans(n_clusters=int(n_clusters), m=m, seed=seed).fit(objects)
+    u = model.membership_
+    labels = [int(v) for v in model.labels_]
+    rho = {s: _pearson(np.asarray(run[s], dtype=np.float64), target) for s in names}
+    selected = pick_per_cluster(labels, [rho[s] for s in names], names)
+    clusters: dict[int, list[str]] = {}
+    for s, c in zip(names, labels):
+        clusters.setdefault(c, []).append(s)
     return SensorSelection(
-        axis=label,
+        selected=selected,
+        clusters=dict(sorted(clusters.items())),
+        correlations=rho,
+        membership=u,
+        axis=axis_out,
         sensors=names,
-        selected=[names[k] for k in chosen.values()],
-        clusters=dict(clusters),
-        correlations=dict(zip(names, rho)),
-        membership=fcm.membership_,
-        labels=labels,
+        weights=weights,
+        model=model,
     )

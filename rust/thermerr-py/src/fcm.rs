@@ -2,30 +2,24 @@
 
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2};
 use pyo3::prelude::*;
-use thermerr_core::fcm::{FcmParams, FuzzyCMeans};
+use thermerr_core::fcm::{hard_labels, FcmParams, FuzzyCMeans};
 use thermerr_core::Matrix;
 
 use crate::{samples, vec_to_py, PyErrWrap};
 
-pub(crate) fn matrix_to_py<'py>(
-    py: Python<'py>,
-    m: &Matrix,
-) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    PyArray1::from_vec(py, m.data.clone()).reshape(m.shape)
-}
-
-fn matrix_from_py(a: &PyReadonlyArray2<'_, f64>) -> PyResult<Matrix> {
-    let s = samples(a)?;
-    Ok(Matrix {
-        shape: [s.nrows(), s.ncols()],
-        data: s.as_slice().to_vec(),
-    })
-}
-
-/// A fitted fuzzy c-means partition (the Python `FuzzyCMeans` holds one).
+/// A fitted fuzzy c-means partition (the Python `FuzzyCMeans` estimator holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "FcmModel")]
 pub struct PyFcmModel {
     inner: FuzzyCMeans,
+}
+
+fn matrix_to_py<'py>(py: Python<'py>, m: Matrix) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let [r, c] = m.shape;
+    PyArray1::from_vec(py, m.data).reshape([r, c])
+}
+
+fn labels_to_py(py: Python<'_>, l: Vec<usize>) -> Bound<'_, PyArray1<i64>> {
+    PyArray1::from_vec(py, l.into_iter().map(|v| v as i64).collect())
 }
 
 #[pymethods]
@@ -44,19 +38,23 @@ impl PyFcmModel {
         init: Option<PyReadonlyArray2<'_, f64>>,
     ) -> PyResult<Self> {
         let xs = samples(&x)?;
-        let init = init.as_ref().map(matrix_from_py).transpose()?;
-        let params = FcmParams {
-            n_clusters,
-            m,
-            tol,
-            max_iter,
-            seed,
-            init,
-        };
+        let init = init
+            .as_ref()
+            .map(|u| samples(u).map(|s| s.to_matrix()))
+            .transpose()?;
+        let params = FcmParams::new(n_clusters)
+            .m(m)
+            .tol(tol)
+            .max_iter(max_iter)
+            .seed(seed)
+            .init(init)
+            .check()
+            .map_err(PyErrWrap)?;
         let inner = py.detach(|| params.fit(xs)).map_err(PyErrWrap)?;
         Ok(PyFcmModel { inner })
     }
 
+    /// Memberships of new objects (rows of `x`) to the fitted centres.
     fn predict_membership<'py>(
         &self,
         py: Python<'py>,
@@ -66,27 +64,43 @@ impl PyFcmModel {
         let u = py
             .detach(|| self.inner.predict_membership(xs))
             .map_err(PyErrWrap)?;
-        matrix_to_py(py, &u)
+        matrix_to_py(py, u)
+    }
+
+    /// Hard labels of new objects (largest membership).
+    fn predict<'py>(
+        &self,
+        py: Python<'py>,
+        x: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<i64>>> {
+        let xs = samples(&x)?;
+        let l = py.detach(|| self.inner.predict(xs)).map_err(PyErrWrap)?;
+        Ok(labels_to_py(py, l))
     }
 
     #[getter]
     fn centers<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        matrix_to_py(py, &self.inner.centers)
+        matrix_to_py(py, self.inner.centers.clone())
     }
 
     #[getter]
     fn membership<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        matrix_to_py(py, &self.inner.membership)
+        matrix_to_py(py, self.inner.membership.clone())
     }
 
     #[getter]
-    fn initial<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        matrix_to_py(py, &self.inner.initial)
+    fn labels<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<i64>> {
+        labels_to_py(py, hard_labels(&self.inner.membership))
     }
 
     #[getter]
-    fn labels(&self) -> Vec<usize> {
-        self.inner.labels()
+    fn history<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec_to_py(py, self.inner.history.clone())
+    }
+
+    #[getter]
+    fn m(&self) -> f64 {
+        self.inner.m
     }
 
     #[getter]
@@ -95,23 +109,23 @@ impl PyFcmModel {
     }
 
     #[getter]
-    fn converged(&self) -> bool {
-        self.inner.converged
-    }
-
-    #[getter]
     fn objective(&self) -> f64 {
         self.inner.objective
     }
 
     #[getter]
-    fn objective_history<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec_to_py(py, self.inner.objective_history.clone())
+    fn converged(&self) -> bool {
+        self.inner.converged
+    }
+
+    #[getter]
+    fn n_clusters(&self) -> usize {
+        self.inner.n_clusters()
     }
 
     #[getter]
     fn n_features(&self) -> usize {
-        self.inner.centers.ncols()
+        self.inner.n_features()
     }
 
     fn to_json(&self) -> PyResult<String> {
