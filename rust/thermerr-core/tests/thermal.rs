@@ -166,7 +166,7 @@ fn coarse_and_fine_sampling_agree_on_shared_instants() {
 fn toml_round_trip_simulates_identically() {
     let mut m = Machine::from_toml(TWO_NODES, "two.toml").unwrap();
     m.drift[0].lag_s = Some(900.0);
-    m.drift[0].ambient_um_per_k = 1.5;
+    m.drift[0].ambient_um_per_k = Some(1.5);
     m.drift[0].quadratic_um_per_k2.insert("hot".into(), 0.01);
     m.nodes[0].sensor_drift_k_per_h = 0.1;
     let text = m.to_toml().unwrap();

@@ -6,6 +6,7 @@ mod fcm;
 mod linear;
 mod rbf;
 mod run;
+mod thermal;
 
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
@@ -39,6 +40,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     linear::register(m)?;
     fcm::register(m)?;
     rbf::register(m)?;
+    thermal::register(m)?;
     Ok(())
 }
 

@@ -99,8 +99,8 @@ pub struct DriftSpec {
     pub um_per_k: BTreeMap<String, f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lag_s: Option<f64>,
-    #[serde(default, skip_serializing_if = "is_zero")]
-    pub ambient_um_per_k: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ambient_um_per_k: Option<f64>,
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub quadratic_um_per_k2: BTreeMap<String, f64>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

@@ -1,5 +1,7 @@
 //! The machine's lumped thermal network: model file, simulation, calibration.
 
+pub mod calibrate;
+pub mod diagnose;
 pub mod machine;
 pub mod sim;
 

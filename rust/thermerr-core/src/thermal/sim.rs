@@ -47,6 +47,15 @@ impl<'a> RunView<'a> {
             })
     }
 
+    /// Names of the columns starting with `prefix`.
+    pub fn cols_with_prefix(&self, prefix: &str) -> Vec<String> {
+        self.cols
+            .keys()
+            .filter(|c| c.starts_with(prefix))
+            .map(|c| c.to_string())
+            .collect()
+    }
+
     pub fn has(&self, name: &str) -> bool {
         self.cols.contains_key(name)
     }
@@ -399,10 +408,10 @@ pub fn drift_terms(
         out.labels_lagged
             .push(format!("quadratic_um_per_k2.{name}"));
     }
-    if d.ambient_um_per_k != 0.0 {
+    if let Some(k_amb) = d.ambient_um_per_k {
         let amb = ambient_series(mach, run)?;
         out.lagged
-            .push((d.ambient_um_per_k, amb.iter().map(|v| v - amb[0]).collect()));
+            .push((k_amb, amb.iter().map(|v| v - amb[0]).collect()));
         out.labels_lagged.push("ambient_um_per_k".into());
     }
     for c in &d.columns {

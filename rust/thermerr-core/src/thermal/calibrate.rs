@@ -1,0 +1,496 @@
+//! Calibration: fit the network's parameters to a measured run.
+//!
+//! Free parameters (capacities, conductances, source powers in log space with bounds a factor
+//! `bound_factor` around the nominal values; source exponents linear within ±`exponent_span`;
+//! the sensed nodes' initial offsets; and the nonlinear parameters of an extension) are searched
+//! by bounded Levenberg–Marquardt. The drift coefficients, which are linear given the simulated
+//! temperatures, are solved exactly inside every evaluation (variable projection). The objective
+//! stacks the sensed temperatures and the error axis, each divided by its noise level, plus weak
+//! priors that keep unidentifiable parameters near the user's estimate.
+
+use faer::Mat;
+
+use super::machine::{Machine, NodeSpec};
+use super::sim::{drift_terms, finish, lag, simulate_nodes, Init, RunView, Simulation};
+use crate::error::{Error, Result};
+use crate::linalg::lstsq;
+use crate::optim::{least_squares, LmOptions};
+
+/// One free parameter and where it lives in the machine.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Param {
+    Capacity(usize),
+    AmbientG(usize),
+    Link(usize),
+    SourceW(usize),
+    SourceExponent(usize),
+    /// Initial offset of node i (K), not stored in the machine.
+    InitOffset(usize),
+    /// `lag_s` of drift entry d.
+    Lag(usize),
+    /// `sensor_drift_k_per_h` of node i.
+    SensorDrift(usize),
+    /// `exponent` of input term k of drift entry d.
+    InputExponent(usize, usize),
+}
+
+/// How a parameter is searched: log space (positive quantities) or linear, and its bounds.
+#[derive(Clone, Debug)]
+pub struct FreeParam {
+    pub param: Param,
+    pub log: bool,
+    pub lo: f64,
+    pub hi: f64,
+    pub start: f64,
+    /// prior centre and width in the search space (None: no prior)
+    pub prior: Option<(f64, f64)>,
+}
+
+/// Options of [`calibrate`].
+#[derive(Clone, Debug)]
+pub struct CalibrationOptions {
+    pub axis: String,
+    /// Positive parameters are bounded to [nominal / f, nominal · f].
+    pub bound_factor: f64,
+    /// Source exponents are bounded to nominal ± this.
+    pub exponent_span: f64,
+    pub fit_initial: bool,
+    /// Width of the log-space prior on thermal parameters (ln 2: a factor of two is one σ).
+    pub prior_log_sigma: f64,
+    /// Noise levels; `None` estimates them from the data (second differences, MAD).
+    pub sigma_t: Option<f64>,
+    pub sigma_e: Option<f64>,
+    /// Only rows `< fit_rows` are fitted (the rest is held out); `None`: all rows.
+    pub fit_rows: Option<usize>,
+    pub max_iter: usize,
+    /// Also search the machine's thermal parameters (false: only extension parameters and the
+    /// linear drift terms, the thermal network kept as given).
+    pub thermal: bool,
+}
+
+impl Default for CalibrationOptions {
+    fn default() -> Self {
+        CalibrationOptions {
+            axis: String::new(),
+            bound_factor: 3.0,
+            exponent_span: 0.6,
+            fit_initial: true,
+            prior_log_sigma: std::f64::consts::LN_2,
+            sigma_t: None,
+            sigma_e: None,
+            fit_rows: None,
+            max_iter: 60,
+            thermal: true,
+        }
+    }
+}
+
+/// A calibrated machine and how well it fits.
+#[derive(Clone, Debug)]
+pub struct Calibration {
+    pub machine: Machine,
+    pub init: Vec<f64>,
+    pub sigma_t: f64,
+    pub sigma_e: f64,
+    /// Σ of squared normalised data residuals over the fitted rows (priors excluded).
+    pub ssr: f64,
+    /// Number of data residuals and of fitted parameters (nonlinear + linear drift terms).
+    pub n_data: usize,
+    pub n_params: usize,
+    pub n_iter: usize,
+    pub converged: bool,
+}
+
+impl Calibration {
+    /// Bayesian information criterion of the fit (Gaussian residuals, noise known up to scale).
+    pub fn bic(&self) -> f64 {
+        let n = self.n_data.max(1) as f64;
+        n * (self.ssr / n).max(1e-300).ln() + self.n_params as f64 * n.ln()
+    }
+}
+
+/// Robust noise level of a series: MAD of second differences / (0.6745 · √6).
+pub fn noise_level(y: &[f64]) -> f64 {
+    if y.len() < 3 {
+        return 0.0;
+    }
+    let mut d: Vec<f64> = y
+        .windows(3)
+        .map(|w| (w[2] - 2.0 * w[1] + w[0]).abs())
+        .collect();
+    d.sort_by(|a, b| a.total_cmp(b));
+    d[d.len() / 2] / (0.6745 * 6f64.sqrt())
+}
+
+/// The default free parameters of a machine (all thermal parameters, initial offsets of the
+/// sensed nodes).
+pub fn default_params(m: &Machine, opts: &CalibrationOptions) -> Vec<FreeParam> {
+    let f = opts.bound_factor.max(1.0 + 1e-6);
+    let pos = |param: Param, v: f64| FreeParam {
+        param,
+        log: true,
+        lo: (v / f).ln(),
+        hi: (v * f).ln(),
+        start: v.ln(),
+        prior: Some((v.ln(), opts.prior_log_sigma)),
+    };
+    let mut out = Vec::new();
+    if opts.thermal {
+        for (i, n) in m.nodes.iter().enumerate() {
+            if n.boundary.is_some() {
+                continue;
+            }
+            out.push(pos(Param::Capacity(i), n.capacity_j_per_k));
+            if n.ambient_w_per_k > 0.0 {
+                out.push(pos(Param::AmbientG(i), n.ambient_w_per_k));
+            }
+        }
+        for (k, l) in m.links.iter().enumerate() {
+            if l.w_per_k > 0.0 {
+                out.push(pos(Param::Link(k), l.w_per_k));
+            }
+        }
+        for (k, s) in m.sources.iter().enumerate() {
+            if s.w > 0.0 {
+                out.push(pos(Param::SourceW(k), s.w));
+                out.push(FreeParam {
+                    param: Param::SourceExponent(k),
+                    log: false,
+                    lo: s.exponent - opts.exponent_span,
+                    hi: s.exponent + opts.exponent_span,
+                    start: s.exponent,
+                    prior: Some((s.exponent, opts.exponent_span)),
+                });
+            }
+        }
+    }
+    if opts.fit_initial {
+        for (i, n) in m.nodes.iter().enumerate() {
+            if n.sensor.is_some() && n.boundary.is_none() {
+                out.push(FreeParam {
+                    param: Param::InitOffset(i),
+                    log: false,
+                    lo: -1.0,
+                    hi: 1.0,
+                    start: 0.0,
+                    prior: None,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Writes parameter values (in search space) into a copy of the machine; returns it and the
+/// initial offsets.
+pub fn apply(m: &Machine, free: &[FreeParam], x: &[f64]) -> (Machine, Vec<f64>) {
+    let mut out = m.clone();
+    let mut init = vec![0.0; m.nodes.len()];
+    for (fp, &v) in free.iter().zip(x) {
+        let v = if fp.log { v.exp() } else { v };
+        match fp.param {
+            Param::Capacity(i) => out.nodes[i].capacity_j_per_k = v,
+            Param::AmbientG(i) => out.nodes[i].ambient_w_per_k = v,
+            Param::Link(k) => out.links[k].w_per_k = v,
+            Param::SourceW(k) => out.sources[k].w = v,
+            Param::SourceExponent(k) => out.sources[k].exponent = v,
+            Param::InitOffset(i) => init[i] = v,
+            Param::Lag(d) => out.drift[d].lag_s = Some(v),
+            Param::SensorDrift(i) => out.nodes[i].sensor_drift_k_per_h = v,
+            Param::InputExponent(d, k) => out.drift[d].inputs[k].exponent = v,
+        }
+    }
+    (out, init)
+}
+
+/// The linear drift terms of `axis` fitted to `measured` over `rows`, with weak priors.
+/// Returns the coefficients (lagged terms first, then instant ones) and the fitted series.
+fn fit_drift(
+    m: &Machine,
+    d: usize,
+    run: &RunView<'_>,
+    temps: &[f64],
+    measured: &[f64],
+    rows: usize,
+    sigma_e: f64,
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    let spec = &m.drift[d];
+    let terms = drift_terms(m, spec, run, temps)?;
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    let mut prior: Vec<(f64, f64)> = Vec::new();
+    for ((c, s), label) in terms.lagged.iter().zip(&terms.labels_lagged) {
+        basis.push(match spec.lag_s {
+            Some(tau) => lag(run.time, s, tau),
+            None => s.clone(),
+        });
+        prior.push(prior_of(label, *c));
+    }
+    for ((c, s), label) in terms.instant.iter().zip(&terms.labels_instant) {
+        basis.push(s.clone());
+        prior.push(prior_of(label, *c));
+    }
+    let nb = basis.len();
+    if nb == 0 {
+        return Ok((Vec::new(), vec![0.0; measured.len()]));
+    }
+    let a = Mat::from_fn(rows + nb, nb, |i, j| {
+        if i < rows {
+            basis[j][i] / sigma_e
+        } else if i - rows == j {
+            1.0 / prior[j].1
+        } else {
+            0.0
+        }
+    });
+    let b: Vec<f64> = (0..rows + nb)
+        .map(|i| {
+            if i < rows {
+                measured[i] / sigma_e
+            } else {
+                prior[i - rows].0 / prior[i - rows].1
+            }
+        })
+        .collect();
+    let coef = lstsq(a.as_ref(), &b)?;
+    let mut fitted = vec![0.0; measured.len()];
+    for (c, s) in coef.iter().zip(&basis) {
+        for (f, v) in fitted.iter_mut().zip(s) {
+            *f += c * v;
+        }
+    }
+    Ok((coef, fitted))
+}
+
+/// Weak prior (centre, width) of a linear drift coefficient: nominal node coefficients are kept
+/// within about their own size; extension terms start at zero with a wide prior.
+fn prior_of(label: &str, nominal: f64) -> (f64, f64) {
+    if label.starts_with("um_per_k.") {
+        (nominal, nominal.abs() + 1.0)
+    } else if label.starts_with("quadratic") {
+        (0.0, 1.0)
+    } else if label.starts_with("inputs.") {
+        (0.0, 50.0)
+    } else {
+        (0.0, 10.0)
+    }
+}
+
+/// Stores fitted drift coefficients back into the machine.
+fn store_drift(m: &mut Machine, d: usize, coef: &[f64]) {
+    let spec = &mut m.drift[d];
+    let mut it = coef.iter().copied();
+    for v in spec.um_per_k.values_mut() {
+        *v = it.next().unwrap_or(*v);
+    }
+    for v in spec.quadratic_um_per_k2.values_mut() {
+        *v = it.next().unwrap_or(*v);
+    }
+    if let Some(v) = spec.ambient_um_per_k.as_mut() {
+        *v = it.next().unwrap_or(*v);
+    }
+    for c in spec.columns.iter_mut() {
+        c.um_per_k = it.next().unwrap_or(c.um_per_k);
+    }
+    for t in spec.inputs.iter_mut() {
+        t.um = it.next().unwrap_or(t.um);
+    }
+}
+
+/// The measured series a calibration compares with.
+pub struct Targets<'a> {
+    pub axis_index: usize,
+    pub measured_e: &'a [f64],
+    /// (node index, measured reading) per sensed simulated node
+    pub sensors: Vec<(usize, &'a [f64])>,
+}
+
+pub fn targets<'a>(m: &Machine, run: &RunView<'a>, axis: &str) -> Result<Targets<'a>> {
+    let axis_index = m.drift.iter().position(|d| d.axis == axis).ok_or_else(|| {
+        Error::param(
+            "axis",
+            format!("the machine has no drift entry for `{axis}`"),
+        )
+    })?;
+    let measured_e = run.col(axis)?;
+    let mut sensors = Vec::new();
+    for (i, n) in m.nodes.iter().enumerate() {
+        if let (Some(c), None) = (&n.sensor, &n.boundary) {
+            sensors.push((i, run.col(c)?));
+        }
+    }
+    Ok(Targets {
+        axis_index,
+        measured_e,
+        sensors,
+    })
+}
+
+/// Simulates `m` and returns (simulation with fitted drift, normalised data residuals over
+/// `rows`). The drift coefficients are re-solved on `rows`.
+#[allow(clippy::too_many_arguments)]
+pub fn evaluate(
+    m: &Machine,
+    init: &[f64],
+    run: &RunView<'_>,
+    tg: &Targets<'_>,
+    rows: usize,
+    sigma_t: f64,
+    sigma_e: f64,
+    refit_drift: bool,
+) -> Result<(Machine, Simulation, Vec<f64>)> {
+    let temps = simulate_nodes(m, run, &Init::Offsets(init.to_vec()))?;
+    let mut fitted = m.clone();
+    if refit_drift {
+        let (coef, _) = fit_drift(m, tg.axis_index, run, &temps, tg.measured_e, rows, sigma_e)?;
+        store_drift(&mut fitted, tg.axis_index, &coef);
+    }
+    let sim = finish(&fitted, run, temps)?;
+    let mut r = Vec::with_capacity(rows * (tg.sensors.len() + 1));
+    let nn = m.nodes.len();
+    for &(i, meas) in &tg.sensors {
+        let node = &fitted.nodes[i];
+        for k in 0..rows {
+            let pred = sim.temps[k * nn + i]
+                + node.sensor_offset_k
+                + node.sensor_drift_k_per_h * (run.time[k] - run.time[0]) / 3600.0;
+            r.push((pred - meas[k]) / sigma_t);
+        }
+    }
+    let e = &sim.drift[tg.axis_index].1;
+    for k in 0..rows {
+        r.push((e[k] - tg.measured_e[k]) / sigma_e);
+    }
+    Ok((fitted, sim, r))
+}
+
+/// Calibrates `m` on `run` with the given free parameters (`None`: [`default_params`]).
+pub fn calibrate(
+    m: &Machine,
+    run: &RunView<'_>,
+    opts: &CalibrationOptions,
+    free: Option<Vec<FreeParam>>,
+) -> Result<Calibration> {
+    let tg = targets(m, run, &opts.axis)?;
+    let rows = opts.fit_rows.unwrap_or(run.len()).min(run.len());
+    if rows < 10 {
+        return Err(Error::Shape(format!(
+            "{}: {rows} rows are too few to calibrate on",
+            run.source
+        )));
+    }
+    let sigma_t = opts.sigma_t.unwrap_or_else(|| {
+        let s: Vec<f64> = tg
+            .sensors
+            .iter()
+            .map(|(_, c)| noise_level(&c[..rows]))
+            .collect();
+        let mean = if s.is_empty() {
+            0.03
+        } else {
+            s.iter().sum::<f64>() / s.len() as f64
+        };
+        mean.max(0.005)
+    });
+    let sigma_e = opts
+        .sigma_e
+        .unwrap_or_else(|| noise_level(&tg.measured_e[..rows]).max(0.02));
+    let free = free.unwrap_or_else(|| default_params(m, opts));
+    let n_linear = {
+        let d = &m.drift[tg.axis_index];
+        d.um_per_k.len()
+            + d.quadratic_um_per_k2.len()
+            + usize::from(d.ambient_um_per_k.is_some())
+            + d.columns.len()
+            + d.inputs.len()
+    };
+    let residual = |x: &[f64]| -> Result<Vec<f64>> {
+        let (mm, init) = apply(m, &free, x);
+        let (_, _, mut r) = evaluate(&mm, &init, run, &tg, rows, sigma_t, sigma_e, true)?;
+        for (fp, v) in free.iter().zip(x) {
+            if let Some((c, w)) = fp.prior {
+                r.push((v - c) / w);
+            }
+        }
+        Ok(r)
+    };
+    let (x, n_iter, converged) = if free.is_empty() {
+        (Vec::new(), 0, true)
+    } else {
+        let x0: Vec<f64> = free.iter().map(|f| f.start.clamp(f.lo, f.hi)).collect();
+        let lo: Vec<f64> = free.iter().map(|f| f.lo).collect();
+        let hi: Vec<f64> = free.iter().map(|f| f.hi).collect();
+        let lm = LmOptions {
+            max_iter: opts.max_iter,
+            ftol: 1e-7,
+            ..LmOptions::default()
+        };
+        let res = least_squares(residual, &x0, &lo, &hi, &lm)?;
+        (res.x, res.n_iter, res.converged)
+    };
+    let (mm, init) = apply(m, &free, &x);
+    let (fitted, _, r) = evaluate(&mm, &init, run, &tg, rows, sigma_t, sigma_e, true)?;
+    Ok(Calibration {
+        machine: fitted,
+        init,
+        sigma_t,
+        sigma_e,
+        ssr: r.iter().map(|v| v * v).sum(),
+        n_data: r.len(),
+        n_params: free
+            .iter()
+            .filter(|f| !matches!(f.param, Param::InitOffset(_)))
+            .count()
+            + n_linear,
+        n_iter,
+        converged,
+    })
+}
+
+/// Initial offsets of the sensed nodes that best explain the first `window` readings of a run
+/// (linear least squares: the network is linear in its initial state). Unsensed nodes keep the
+/// formats.md start (the ambient's first reading).
+pub fn fit_initial_offsets(m: &Machine, run: &RunView<'_>, window: usize) -> Result<Vec<f64>> {
+    let nn = m.nodes.len();
+    let sensed: Vec<(usize, &[f64])> = m
+        .nodes
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| n.sensor.is_some() && n.boundary.is_none())
+        .map(|(i, n)| Ok((i, run.col(n.sensor.as_deref().unwrap_or_default())?)))
+        .collect::<Result<_>>()?;
+    let w = window.min(run.len()).max(1);
+    if sensed.is_empty() {
+        return Ok(vec![0.0; nn]);
+    }
+    let base = simulate_nodes(m, run, &Init::Offsets(vec![0.0; nn]))?;
+    let mut cols = Vec::new();
+    for &(j, _) in &sensed {
+        let mut off = vec![0.0; nn];
+        off[j] = 1.0;
+        let resp = simulate_nodes(m, run, &Init::Offsets(off))?;
+        let mut col = Vec::with_capacity(w * sensed.len());
+        for &(i, _) in &sensed {
+            for k in 0..w {
+                col.push(resp[k * nn + i] - base[k * nn + i]);
+            }
+        }
+        cols.push(col);
+    }
+    let mut rhs = Vec::with_capacity(w * sensed.len());
+    for &(i, meas) in &sensed {
+        let node: &NodeSpec = &m.nodes[i];
+        for k in 0..w {
+            let pred = base[k * nn + i]
+                + node.sensor_offset_k
+                + node.sensor_drift_k_per_h * (run.time[k] - run.time[0]) / 3600.0;
+            rhs.push(meas[k] - pred);
+        }
+    }
+    let a = Mat::from_fn(rhs.len(), cols.len(), |r, c| cols[c][r]);
+    let sol = lstsq(a.as_ref(), &rhs)?;
+    let mut off = vec![0.0; nn];
+    for (&(j, _), v) in sensed.iter().zip(sol) {
+        off[j] = v.clamp(-2.0, 2.0);
+    }
+    Ok(off)
+}

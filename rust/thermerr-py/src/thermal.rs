@@ -1,0 +1,351 @@
+//! The thermal network: machine files, simulation, calibration and diagnosis.
+
+use std::path::PathBuf;
+
+use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+use thermerr_core::run::Run;
+use thermerr_core::thermal::calibrate::{calibrate, CalibrationOptions};
+use thermerr_core::thermal::diagnose::{diagnose, Candidate, DiagnoseOptions, Holdout};
+use thermerr_core::thermal::{simulate, Init, Machine, RunView};
+
+use crate::{slice1, vec_to_py, PyErrWrap};
+
+/// A run handed over from Python: source, time, names and the n × k data matrix.
+fn core_run(
+    source: &str,
+    time: &PyReadonlyArray1<'_, f64>,
+    names: Vec<String>,
+    data: &PyReadonlyArray2<'_, f64>,
+) -> PyResult<Run> {
+    let t = slice1(time)?.to_vec();
+    let (n, k) = (data.shape()[0], data.shape()[1]);
+    if n != t.len() || k != names.len() {
+        return Err(PyErrWrap(thermerr_core::Error::Shape(format!(
+            "run data is {n} x {k} for {} times and {} names",
+            t.len(),
+            names.len()
+        )))
+        .into());
+    }
+    let view = data.as_array();
+    let columns = (0..k)
+        .map(|j| (0..n).map(|i| view[(i, j)]).collect())
+        .collect();
+    Ok(Run {
+        source: source.to_string(),
+        time_s: t,
+        names,
+        columns,
+        ignored: Vec::new(),
+        dropped_rows: Vec::new(),
+        interpolated: 0,
+    })
+}
+
+/// A machine model (formats.md TOML) — the Python `Machine` wraps it.
+#[pyclass(frozen, module = "thermerr_rs._core", name = "MachineModel")]
+pub struct PyMachine {
+    pub inner: Machine,
+    pub file: String,
+}
+
+#[pymethods]
+impl PyMachine {
+    #[staticmethod]
+    fn load(path: PathBuf) -> PyResult<Self> {
+        let inner = Machine::load(&path).map_err(PyErrWrap)?;
+        Ok(PyMachine {
+            inner,
+            file: path.display().to_string(),
+        })
+    }
+
+    #[staticmethod]
+    #[pyo3(signature = (text, file = "<string>"))]
+    fn from_toml(text: &str, file: &str) -> PyResult<Self> {
+        Ok(PyMachine {
+            inner: Machine::from_toml(text, file).map_err(PyErrWrap)?,
+            file: file.to_string(),
+        })
+    }
+
+    fn to_toml(&self) -> PyResult<String> {
+        Ok(self.inner.to_toml().map_err(PyErrWrap)?)
+    }
+
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name.clone()
+    }
+
+    #[getter]
+    fn file(&self) -> String {
+        self.file.clone()
+    }
+
+    #[getter]
+    fn nodes(&self) -> Vec<String> {
+        self.inner.nodes.iter().map(|n| n.name.clone()).collect()
+    }
+
+    #[getter]
+    fn axes(&self) -> Vec<String> {
+        self.inner.drift.iter().map(|d| d.axis.clone()).collect()
+    }
+
+    #[getter]
+    fn sensors(&self) -> Vec<String> {
+        self.inner
+            .nodes
+            .iter()
+            .filter_map(|n| n.sensor.clone())
+            .collect()
+    }
+
+    /// Every run column the machine reads.
+    fn columns(&self) -> Vec<String> {
+        self.inner.columns().into_iter().map(|(c, _)| c).collect()
+    }
+
+    /// Simulates a run: dict with `nodes` (n × n_nodes), `node_names`, `sensors` {column: series},
+    /// `drift` {axis: series}.
+    #[pyo3(signature = (source, time, names, data, *, fit_initial = 0))]
+    fn simulate<'py>(
+        &self,
+        py: Python<'py>,
+        source: &str,
+        time: PyReadonlyArray1<'py, f64>,
+        names: Vec<String>,
+        data: PyReadonlyArray2<'py, f64>,
+        fit_initial: usize,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let run = core_run(source, &time, names, &data)?;
+        let sim = py
+            .detach(|| {
+                let view = RunView::new(&run);
+                self.inner
+                    .check_columns(&self.file, &run.source, |c| view.has(c))?;
+                let init = if fit_initial > 0 {
+                    Init::Offsets(thermerr_core::thermal::calibrate::fit_initial_offsets(
+                        &self.inner,
+                        &view,
+                        fit_initial,
+                    )?)
+                } else {
+                    Init::FirstReading
+                };
+                simulate(&self.inner, &view, &init)
+            })
+            .map_err(PyErrWrap)?;
+        let d = PyDict::new(py);
+        let nn = sim.node_names.len();
+        let nodes = numpy::PyArray1::from_vec(py, sim.temps.clone());
+        d.set_item(
+            "nodes",
+            numpy::PyArrayMethods::reshape(&nodes, [sim.temps.len() / nn.max(1), nn])?,
+        )?;
+        d.set_item("node_names", sim.node_names.clone())?;
+        let s = PyDict::new(py);
+        for (c, v) in sim.sensors {
+            s.set_item(c, vec_to_py(py, v))?;
+        }
+        d.set_item("sensors", s)?;
+        let e = PyDict::new(py);
+        for (a, v) in sim.drift {
+            e.set_item(a, vec_to_py(py, v))?;
+        }
+        d.set_item("drift", e)?;
+        Ok(d)
+    }
+
+    /// Calibrates on a run; returns (calibrated machine, info dict).
+    #[pyo3(signature = (source, time, names, data, *, axis, bound_factor = 3.0, max_iter = 60))]
+    #[allow(clippy::too_many_arguments)]
+    fn calibrate<'py>(
+        &self,
+        py: Python<'py>,
+        source: &str,
+        time: PyReadonlyArray1<'py, f64>,
+        names: Vec<String>,
+        data: PyReadonlyArray2<'py, f64>,
+        axis: String,
+        bound_factor: f64,
+        max_iter: usize,
+    ) -> PyResult<(PyMachine, Bound<'py, PyDict>)> {
+        let run = core_run(source, &time, names, &data)?;
+        let opts = CalibrationOptions {
+            axis,
+            bound_factor,
+            max_iter,
+            ..CalibrationOptions::default()
+        };
+        let cal = py
+            .detach(|| {
+                let view = RunView::new(&run);
+                self.inner
+                    .check_columns(&self.file, &run.source, |c| view.has(c))?;
+                calibrate(&self.inner, &view, &opts, None)
+            })
+            .map_err(PyErrWrap)?;
+        let d = PyDict::new(py);
+        d.set_item("sigma_t", cal.sigma_t)?;
+        d.set_item("sigma_e", cal.sigma_e)?;
+        d.set_item("ssr", cal.ssr)?;
+        d.set_item("n_data", cal.n_data)?;
+        d.set_item("n_params", cal.n_params)?;
+        d.set_item("bic", cal.bic())?;
+        d.set_item("n_iter", cal.n_iter)?;
+        d.set_item("converged", cal.converged)?;
+        d.set_item("init_offsets", cal.init.clone())?;
+        Ok((
+            PyMachine {
+                inner: cal.machine,
+                file: format!("{} (calibrated)", self.file),
+            },
+            d,
+        ))
+    }
+
+    /// The full diagnosis; returns a dict (report fields, series, calibrated/extended TOML).
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axis = None, holdout_fraction = 0.3, min_score = 0.25, noise_ratio = 2.0))]
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    fn diagnose<'py>(
+        &self,
+        py: Python<'py>,
+        source: &str,
+        time: PyReadonlyArray1<'py, f64>,
+        names: Vec<String>,
+        data: PyReadonlyArray2<'py, f64>,
+        holdout: Option<(
+            String,
+            PyReadonlyArray1<'py, f64>,
+            Vec<String>,
+            PyReadonlyArray2<'py, f64>,
+        )>,
+        axis: Option<String>,
+        holdout_fraction: f64,
+        min_score: f64,
+        noise_ratio: f64,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let run = core_run(source, &time, names, &data)?;
+        let hold = holdout
+            .as_ref()
+            .map(|(s, t, n, d)| core_run(s, t, n.clone(), d))
+            .transpose()?;
+        let opts = DiagnoseOptions {
+            axis,
+            holdout_fraction,
+            min_score,
+            noise_ratio,
+            ..DiagnoseOptions::default()
+        };
+        let diag = py
+            .detach(|| {
+                let view = RunView::new(&run);
+                self.inner
+                    .check_columns(&self.file, &run.source, |c| view.has(c))?;
+                let hview = hold.as_ref().map(RunView::new);
+                if let Some(h) = &hview {
+                    self.inner
+                        .check_columns(&self.file, &h.source, |c| h.has(c))?;
+                }
+                diagnose(&self.inner, &view, hview.as_ref(), &opts)
+            })
+            .map_err(PyErrWrap)?;
+        let fig = |h: &Holdout| -> PyResult<Bound<'py, PyDict>> {
+            let d = PyDict::new(py);
+            d.set_item("rmse_um", h.rmse_um)?;
+            d.set_item("max_abs_um", h.max_abs_um)?;
+            d.set_item("band_um", h.band_um)?;
+            Ok(d)
+        };
+        let out = PyDict::new(py);
+        out.set_item("axis", &diag.axis)?;
+        out.set_item("verdict", &diag.verdict)?;
+        out.set_item("column", &diag.column)?;
+        out.set_item("evidence", &diag.evidence)?;
+        out.set_item("noise_um", diag.noise_um)?;
+        out.set_item("baseline", fig(&diag.baseline_holdout)?)?;
+        out.set_item("extended", fig(diag.extended_holdout())?)?;
+        out.set_item("gain_pct", diag.gain_pct())?;
+        out.set_item("holdout", &diag.holdout_label)?;
+        let cands = PyList::empty(py);
+        for c in &diag.candidates {
+            cands.append(candidate_dict(py, c)?)?;
+        }
+        out.set_item("candidates", cands)?;
+        out.set_item(
+            "calibrated_toml",
+            diag.baseline.machine.to_toml().map_err(PyErrWrap)?,
+        )?;
+        out.set_item(
+            "extended_toml",
+            diag.extended().to_toml().map_err(PyErrWrap)?,
+        )?;
+        let series = PyDict::new(py);
+        series.set_item("time_s", vec_to_py(py, diag.holdout_time.clone()))?;
+        series.set_item("measured", vec_to_py(py, diag.holdout_measured.clone()))?;
+        series.set_item(
+            "baseline",
+            vec_to_py(py, diag.baseline_holdout.predicted.clone()),
+        )?;
+        series.set_item(
+            "extended",
+            vec_to_py(py, diag.extended_holdout().predicted.clone()),
+        )?;
+        if let Some(col) = diag
+            .column
+            .as_ref()
+            .filter(|_| diag.verdict == "sensor_drift")
+        {
+            let find = |h: &Holdout| {
+                h.sensor_residuals
+                    .iter()
+                    .find(|(c, _)| c == col)
+                    .map(|(_, r)| r.clone())
+            };
+            if let (Some(b), Some(e)) =
+                (find(&diag.baseline_holdout), find(diag.extended_holdout()))
+            {
+                let s = PyDict::new(py);
+                s.set_item("column", col)?;
+                s.set_item("baseline_residual", vec_to_py(py, b))?;
+                s.set_item("extended_residual", vec_to_py(py, e))?;
+                series.set_item("sensor", s)?;
+            }
+        }
+        out.set_item("series", series)?;
+        let base = PyDict::new(py);
+        base.set_item("bic", diag.baseline.bic())?;
+        base.set_item("sigma_t", diag.baseline.sigma_t)?;
+        base.set_item("sigma_e", diag.baseline.sigma_e)?;
+        base.set_item("n_iter", diag.baseline.n_iter)?;
+        base.set_item("converged", diag.baseline.converged)?;
+        out.set_item("calibration", base)?;
+        Ok(out)
+    }
+}
+
+fn candidate_dict<'py>(py: Python<'py>, c: &Candidate) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("cause", &c.cause)?;
+    d.set_item("column", &c.column)?;
+    d.set_item("node", &c.node)?;
+    d.set_item("score", c.score)?;
+    d.set_item("gain_pct", c.gain_pct)?;
+    d.set_item("delta_bic", c.delta_bic)?;
+    d.set_item("sensor_gain_pct", c.sensor_gain_pct)?;
+    d.set_item("rmse_um", c.holdout.rmse_um)?;
+    let p = PyDict::new(py);
+    for (k, v) in &c.parameters {
+        p.set_item(k, v)?;
+    }
+    d.set_item("parameters", p)?;
+    Ok(d)
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyMachine>()
+}
