@@ -143,7 +143,7 @@ class Diagnosis:
 
 
 def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: str | None = None,
-             holdout_fraction: float = 0.3, min_score: float = 0.25, noise_ratio: float = 2.0) -> Diagnosis:
+             holdout_fraction: float = 0.3, min_score: float = 0.1, noise_ratio: float = 2.0) -> Diagnosis:
     """Calibrate ``machine`` on ``run`` (its first 70 % when no ``holdout`` run is given), fit the
     extension of every catalogued cause, score all on the held-out data and name the cause.
 

@@ -78,7 +78,8 @@ fn to_theta(p: &[f64], lo: &[f64], hi: &[f64]) -> Vec<f64> {
     p.iter()
         .zip(lo.iter().zip(hi))
         .map(|(v, (l, h))| {
-            let s = ((v - l) / (h - l)).clamp(1e-9, 1.0 - 1e-9);
+            // keep starts off the flat tails of the logistic, where the gradient vanishes
+            let s = ((v - l) / (h - l)).clamp(1e-6, 1.0 - 1e-6);
             (s / (1.0 - s)).ln()
         })
         .collect()
@@ -169,11 +170,15 @@ where
             converged = true;
             break;
         }
+        // Marquardt's diagonal scaling, floored relative to the largest entry so that
+        // parameters with (almost) no influence do not make the damped system singular
+        let dmax = (0..n).map(|j| jtj[(j, j)]).fold(0.0_f64, f64::max);
+        let floor = (dmax * 1e-10).max(1e-300);
         let mut accepted = false;
-        for _ in 0..30 {
+        for _ in 0..40 {
             let mut a = jtj.clone();
             for j in 0..n {
-                a[(j, j)] += lambda * jtj[(j, j)].max(1e-12);
+                a[(j, j)] += lambda * jtj[(j, j)].max(floor);
             }
             let Ok(chol) = a.llt(Side::Lower) else {
                 lambda *= 4.0;

@@ -209,7 +209,7 @@ impl PyMachine {
     }
 
     /// The full diagnosis; returns a dict (report fields, series, calibrated/extended TOML).
-    #[pyo3(signature = (source, time, names, data, holdout = None, *, axis = None, holdout_fraction = 0.3, min_score = 0.25, noise_ratio = 2.0))]
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axis = None, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn diagnose<'py>(
         &self,

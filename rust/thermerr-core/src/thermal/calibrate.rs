@@ -79,7 +79,7 @@ impl Default for CalibrationOptions {
             sigma_t: None,
             sigma_e: None,
             fit_rows: None,
-            max_iter: 60,
+            max_iter: 100,
             thermal: true,
         }
     }
@@ -421,7 +421,7 @@ pub fn calibrate(
         let hi: Vec<f64> = free.iter().map(|f| f.hi).collect();
         let lm = LmOptions {
             max_iter: opts.max_iter,
-            ftol: 1e-7,
+            ftol: 1e-9,
             ..LmOptions::default()
         };
         let res = least_squares(residual, &x0, &lo, &hi, &lm)?;

@@ -48,7 +48,7 @@ impl Default for DiagnoseOptions {
             axis: None,
             holdout_fraction: 0.3,
             init_window: 20,
-            min_score: 0.25,
+            min_score: 0.1,
             noise_ratio: 2.0,
             calibration: CalibrationOptions::default(),
         }
@@ -388,22 +388,44 @@ pub fn diagnose(
     let baseline = calibrate(m, train, &copts, None)?;
     let base_hold = score(&baseline, &axis, train, hold, split, opts.init_window)?;
     let mb = &baseline.machine;
-    let specs = candidates(mb, axis_index, train);
+    // extensions are built on the nominal machine, so that bounds and priors are the baseline's
+    // (centred on the user's estimate); the search starts from the calibrated values
+    let specs = candidates(m, axis_index, train);
     let mut copts_ext = copts.clone();
     copts_ext.sigma_t = Some(baseline.sigma_t);
     copts_ext.sigma_e = Some(baseline.sigma_e);
-    copts_ext.max_iter = copts.max_iter.min(40);
     let fitted: Vec<Result<Candidate>> = specs
         .into_par_iter()
         .map(|spec| {
+            let nominal_free = {
+                let mut f = default_params(&spec.machine, &copts_ext);
+                f.extend(spec.extra.iter().cloned());
+                f
+            };
             let mut free = default_params(&spec.machine, &copts_ext);
             for fp in free.iter_mut() {
-                if let Param::InitOffset(i) = fp.param {
-                    fp.start = baseline.init[i];
+                let v = match fp.param {
+                    Param::InitOffset(i) => Some(baseline.init[i]),
+                    Param::Capacity(i) => mb.nodes.get(i).map(|n| n.capacity_j_per_k),
+                    Param::AmbientG(i) => mb.nodes.get(i).map(|n| n.ambient_w_per_k),
+                    Param::Link(k) => mb.links.get(k).map(|l| l.w_per_k),
+                    Param::SourceW(k) => mb.sources.get(k).map(|s| s.w),
+                    Param::SourceExponent(k) => mb.sources.get(k).map(|s| s.exponent),
+                    _ => None,
+                };
+                if let Some(v) = v {
+                    fp.start = if fp.log { v.ln() } else { v };
                 }
             }
             free.extend(spec.extra.iter().cloned());
-            let cal = calibrate(&spec.machine, train, &copts_ext, Some(free))?;
+            let mut cal = calibrate(&spec.machine, train, &copts_ext, Some(free))?;
+            if spec.cause == "sensor_drift" {
+                // a drifting sensor biases the baseline itself: also fit from the nominal start
+                let cold = calibrate(&spec.machine, train, &copts_ext, Some(nominal_free))?;
+                if cold.ssr < cal.ssr {
+                    cal = cold;
+                }
+            }
             let h = score(&cal, &axis, train, hold, split, opts.init_window)?;
             let mut parameters = BTreeMap::new();
             let d = &cal.machine.drift[axis_index];
