@@ -349,16 +349,16 @@ pub fn evaluate(
     let nn = m.nodes.len();
     for &(i, meas) in &tg.sensors {
         let node = &fitted.nodes[i];
-        for k in 0..rows {
+        for (k, (mk, tk)) in meas.iter().zip(run.time).take(rows).enumerate() {
             let pred = sim.temps[k * nn + i]
                 + node.sensor_offset_k
-                + node.sensor_drift_k_per_h * (run.time[k] - run.time[0]) / 3600.0;
-            r.push((pred - meas[k]) / sigma_t);
+                + node.sensor_drift_k_per_h * (tk - run.time[0]) / 3600.0;
+            r.push((pred - mk) / sigma_t);
         }
     }
     let e = &sim.drift[tg.axis_index].1;
-    for k in 0..rows {
-        r.push((e[k] - tg.measured_e[k]) / sigma_e);
+    for (ek, mk) in e.iter().zip(tg.measured_e).take(rows) {
+        r.push((ek - mk) / sigma_e);
     }
     Ok((fitted, sim, r))
 }
