@@ -3,6 +3,9 @@
     thermerr fit RUN.csv --axis E_z --model mlr|rbf [--sensors auto|T_a,T_b] --out MODEL.json
     thermerr evaluate MODEL.json RUN.csv
     thermerr select-sensors RUN.csv --axis E_z
+    thermerr predict RUN.csv --machine M.toml --out PRED.csv
+    thermerr calibrate RUN.csv --machine M.toml --out CAL.toml
+    thermerr diagnose RUN.csv --machine M.toml --out DIR [--holdout TEST.csv]
 
 Bad input ends with a one-line message on stderr and exit status 2.
 """
@@ -126,6 +129,58 @@ def cmd_select(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_predict(args: argparse.Namespace) -> int:
+    from ._io import write_atomic
+    from .thermal import Machine
+
+    machine = Machine.load(args.machine)
+    run = read_run(args.run, nan=args.nan)
+    sim = machine.simulate(run, fit_initial=args.fit_initial)
+    cols = {"time_s": run.time_s}
+    cols.update({f"{a}_pred": v for a, v in sim.drift.items()})
+    cols.update({f"{c}_pred": v for c, v in sim.sensors.items()})
+    names = list(cols)
+    lines = [",".join(names)]
+    for i in range(len(run)):
+        lines.append(",".join(f"{cols[n][i]:.6f}" for n in names))
+    write_atomic(args.out, "\n".join(lines) + "\n")
+    _say(args, f"wrote {args.out}: {', '.join(names[1:])} for {len(run)} samples")
+    return 0
+
+
+def cmd_calibrate(args: argparse.Namespace) -> int:
+    from .thermal import Machine
+
+    machine = Machine.load(args.machine)
+    run = read_run(args.run, nan=args.nan)
+    cal, info = machine.calibrate(run, args.axis)
+    cal.save(args.out)
+    if args.json:
+        print(json.dumps(info, indent=1))
+    else:
+        _say(args, f"calibrated {args.machine} on {run.source} ({info['n_iter']} iterations, "
+                   f"normalised RMS residual {(info['ssr'] / info['n_data']) ** 0.5:.2f}); wrote {args.out}")
+    return 0
+
+
+def cmd_diagnose(args: argparse.Namespace) -> int:
+    from .thermal import Machine, diagnose
+
+    machine = Machine.load(args.machine)
+    run = read_run(args.run, nan=args.nan)
+    hold = read_run(args.holdout, nan=args.nan) if args.holdout else None
+    if _progress_enabled(args):
+        print("calibrating the baseline and every candidate extension ...", file=sys.stderr)
+    d = diagnose(run, machine, hold, axis=args.axis)
+    page = d.write(args.out)
+    if args.json:
+        print(json.dumps(d.report, indent=1))
+    else:
+        print(d)
+        print(f"report: {page}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="thermerr", description="Machine-tool thermal error models and diagnosis.")
     p.add_argument("--version", action="version", version=f"thermerr_rs {__version__}")
@@ -171,6 +226,32 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=int, default=0)
     common(s)
     s.set_defaults(func=cmd_select)
+
+    pr = sub.add_parser("predict", help="simulate a run with a machine model (thermal network)")
+    pr.add_argument("run", help="measured run CSV (its inputs and boundary columns drive the model)")
+    pr.add_argument("--machine", required=True, help="machine TOML")
+    pr.add_argument("--out", required=True, help="CSV to write: time_s, E_<axis>_pred, T_<sensor>_pred")
+    pr.add_argument("--fit-initial", type=int, default=0, metavar="N",
+                    help="estimate the sensed nodes' start from the first N readings (default: first reading)")
+    common(pr)
+    pr.set_defaults(func=cmd_predict)
+
+    ca = sub.add_parser("calibrate", help="fit a machine model's parameters to a run")
+    ca.add_argument("run", help="measured run CSV")
+    ca.add_argument("--machine", required=True, help="nominal machine TOML")
+    ca.add_argument("--axis", default=None, help="error axis (default: the machine's first)")
+    ca.add_argument("--out", required=True, help="calibrated machine TOML to write")
+    common(ca)
+    ca.set_defaults(func=cmd_calibrate)
+
+    dg = sub.add_parser("diagnose", help="name what the machine model gets wrong, extend it, measure the gain")
+    dg.add_argument("run", help="measured run CSV")
+    dg.add_argument("--machine", required=True, help="nominal machine TOML")
+    dg.add_argument("--out", required=True, help="directory for report.json, report.html, calibrated.toml, extended.toml")
+    dg.add_argument("--holdout", default=None, help="a separate held-out run (default: the last 30 %% of RUN)")
+    dg.add_argument("--axis", default=None, help="error axis (default: the machine's first)")
+    common(dg)
+    dg.set_defaults(func=cmd_diagnose)
     return p
 
 
