@@ -73,3 +73,83 @@ class FcmModel:
     def from_json(text: str) -> FcmModel: ...
 
 # --- RBF networks -------------------------------------------------------------------------------
+@final
+class RbfModel:
+    @staticmethod
+    def fit(
+        x: _F64,
+        y: _F64,
+        *,
+        design: str = "exact",
+        spread: float = 1.0,
+        goal: float = 0.0,
+        max_neurons: int | None = None,
+        n_centers: int | None = None,
+        seed: int | None = None,
+        rule: str = "ols",
+    ) -> RbfModel: ...
+    def predict(self, x: _F64) -> _F64: ...
+    @property
+    def centers(self) -> _F64: ...
+    @property
+    def weights(self) -> _F64: ...
+    @property
+    def bias(self) -> float: ...
+    @property
+    def selected(self) -> list[int]: ...
+    @property
+    def sse_history(self) -> _F64: ...
+    @property
+    def n_features(self) -> int: ...
+    def to_json(self) -> str: ...
+    @staticmethod
+    def from_json(text: str) -> RbfModel: ...
+
+def kmeans(x: _F64, init: _F64, max_iter: int = 300) -> tuple[_F64, list[int], int, float]: ...
+
+# --- thermal network ----------------------------------------------------------------------------
+@final
+class MachineModel:
+    @staticmethod
+    def load(path: str) -> MachineModel: ...
+    @staticmethod
+    def from_toml(text: str, file: str = "<string>") -> MachineModel: ...
+    def to_toml(self) -> str: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def file(self) -> str: ...
+    @property
+    def nodes(self) -> list[str]: ...
+    @property
+    def axes(self) -> list[str]: ...
+    @property
+    def sensors(self) -> list[str]: ...
+    def columns(self) -> list[str]: ...
+    def simulate(
+        self, source: str, time: _F64, names: list[str], data: _F64, *, fit_initial: int = 0
+    ) -> dict[str, Any]: ...
+    def calibrate(
+        self,
+        source: str,
+        time: _F64,
+        names: list[str],
+        data: _F64,
+        *,
+        axis: str,
+        bound_factor: float = 3.0,
+        max_iter: int = 60,
+    ) -> tuple[MachineModel, dict[str, Any]]: ...
+    def diagnose(
+        self,
+        source: str,
+        time: _F64,
+        names: list[str],
+        data: _F64,
+        holdout: tuple[str, _F64, list[str], _F64] | None = None,
+        *,
+        axis: str | None = None,
+        holdout_fraction: float = 0.3,
+        min_score: float = 0.1,
+        noise_ratio: float = 2.0,
+    ) -> dict[str, Any]: ...

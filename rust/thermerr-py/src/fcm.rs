@@ -1,21 +1,15 @@
 //! Fuzzy c-means.
 
-use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
 use thermerr_core::fcm::{hard_labels, FcmParams, FuzzyCMeans};
-use thermerr_core::Matrix;
 
-use crate::{samples, vec_to_py, PyErrWrap};
+use crate::{matrix_to_py, samples, vec_to_py, PyErrWrap};
 
 /// A fitted fuzzy c-means partition (the Python `FuzzyCMeans` estimator holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "FcmModel")]
 pub struct PyFcmModel {
     inner: FuzzyCMeans,
-}
-
-fn matrix_to_py<'py>(py: Python<'py>, m: Matrix) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let [r, c] = m.shape;
-    PyArray1::from_vec(py, m.data).reshape([r, c])
 }
 
 fn labels_to_py(py: Python<'_>, l: Vec<usize>) -> Bound<'_, PyArray1<i64>> {

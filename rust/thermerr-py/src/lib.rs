@@ -29,6 +29,16 @@ pub(crate) fn slice1<'a>(y: &'a PyReadonlyArray1<'_, f64>) -> PyResult<&'a [f64]
     })
 }
 
+/// Moves an owned matrix into a 2-D NumPy array (no copy of the buffer).
+pub(crate) fn matrix_to_py(
+    py: Python<'_>,
+    m: thermerr_core::Matrix,
+) -> PyResult<Bound<'_, numpy::PyArray2<f64>>> {
+    use numpy::PyArrayMethods;
+    let [r, c] = m.shape;
+    PyArray1::from_vec(py, m.data).reshape([r, c])
+}
+
 pub(crate) fn vec_to_py(py: Python<'_>, v: Vec<f64>) -> Bound<'_, PyArray1<f64>> {
     PyArray1::from_vec(py, v)
 }

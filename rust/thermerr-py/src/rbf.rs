@@ -1,6 +1,154 @@
-//! RBF networks (filled in by the RBF work).
-use pyo3::prelude::*;
+//! RBF networks and k-means.
 
-pub fn register(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use thermerr_core::kmeans::kmeans as core_kmeans;
+use thermerr_core::rbf::{Design, RbfNetwork, RbfParams, Rule};
+use thermerr_core::{Error, Matrix};
+
+use crate::{matrix_to_py, samples, slice1, vec_to_py, PyErrWrap};
+
+/// A fitted RBF network (the Python `RBFNetwork` holds one).
+#[pyclass(frozen, module = "thermerr_rs._core", name = "RbfModel")]
+pub struct PyRbfModel {
+    inner: RbfNetwork,
+}
+
+#[pymethods]
+impl PyRbfModel {
+    #[staticmethod]
+    #[pyo3(signature = (x, y, *, design = "exact", spread = 1.0, goal = 0.0, max_neurons = None, n_centers = None, seed = None, rule = "ols"))]
+    #[allow(clippy::too_many_arguments)]
+    fn fit(
+        py: Python<'_>,
+        x: PyReadonlyArray2<'_, f64>,
+        y: PyReadonlyArray1<'_, f64>,
+        design: &str,
+        spread: f64,
+        goal: f64,
+        max_neurons: Option<usize>,
+        n_centers: Option<usize>,
+        seed: Option<u64>,
+        rule: &str,
+    ) -> PyResult<Self> {
+        let design = match design {
+            "exact" => Design::Exact,
+            "ols" => Design::Ols,
+            "kmeans" => Design::KMeans,
+            other => {
+                return Err(PyErrWrap(Error::InvalidParam {
+                    name: "design",
+                    reason: format!("must be \"exact\", \"ols\" or \"kmeans\", got {other:?}"),
+                })
+                .into())
+            }
+        };
+        let rule = match rule {
+            "ols" => Rule::Ols,
+            "max_error" => Rule::MaxError,
+            other => {
+                return Err(PyErrWrap(Error::InvalidParam {
+                    name: "rule",
+                    reason: format!("must be \"ols\" or \"max_error\", got {other:?}"),
+                })
+                .into())
+            }
+        };
+        let (xs, ys) = (samples(&x)?, slice1(&y)?);
+        let params = RbfParams {
+            design,
+            spread,
+            goal,
+            max_neurons,
+            n_centers,
+            seed,
+            rule,
+        };
+        let inner = py.detach(|| params.fit(xs, ys)).map_err(PyErrWrap)?;
+        Ok(PyRbfModel { inner })
+    }
+
+    fn predict<'py>(
+        &self,
+        py: Python<'py>,
+        x: PyReadonlyArray2<'py, f64>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let xs = samples(&x)?;
+        let y = py.detach(|| self.inner.predict(xs)).map_err(PyErrWrap)?;
+        Ok(vec_to_py(py, y))
+    }
+
+    #[getter]
+    fn centers<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
+        matrix_to_py(py, self.inner.centers.clone())
+    }
+
+    #[getter]
+    fn weights<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec_to_py(py, self.inner.weights.clone())
+    }
+
+    #[getter]
+    fn bias(&self) -> f64 {
+        self.inner.bias
+    }
+
+    #[getter]
+    fn selected(&self) -> Vec<usize> {
+        self.inner.selected.clone()
+    }
+
+    #[getter]
+    fn sse_history<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        vec_to_py(py, self.inner.sse_history.clone())
+    }
+
+    #[getter]
+    fn n_features(&self) -> usize {
+        self.inner.n_features()
+    }
+
+    fn to_json(&self) -> PyResult<String> {
+        crate::to_json(&self.inner)
+    }
+
+    #[staticmethod]
+    fn from_json(text: &str) -> PyResult<Self> {
+        Ok(PyRbfModel {
+            inner: crate::from_json(text)?,
+        })
+    }
+}
+
+/// Lloyd's k-means from given initial centres: (centres, labels, n_iter, inertia).
+#[pyfunction]
+#[pyo3(signature = (x, init, max_iter = 300))]
+#[allow(clippy::type_complexity)]
+fn kmeans<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    init: PyReadonlyArray2<'py, f64>,
+    max_iter: usize,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, Vec<usize>, usize, f64)> {
+    let xs = samples(&x)?;
+    let is = samples(&init)?;
+    let init = Matrix {
+        shape: [is.nrows(), is.ncols()],
+        data: is.as_slice().to_vec(),
+    };
+    let km = py
+        .detach(|| core_kmeans(xs, &init, max_iter))
+        .map_err(PyErrWrap)?;
+    Ok((
+        matrix_to_py(py, km.centers)?,
+        km.labels,
+        km.n_iter,
+        km.inertia,
+    ))
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyRbfModel>()?;
+    m.add_function(wrap_pyfunction!(kmeans, m)?)?;
     Ok(())
 }
