@@ -17,8 +17,9 @@ class RBFNetwork(Estimator):
     Parameters
     ----------
     design : ``"exact"`` — MATLAB ``newrbe``: one neuron per training sample, weights solved
-        exactly (minimum-norm solution of the underdetermined system with the bias; it
-        interpolates the training data). ``"ols"`` — MATLAB ``newrb``: forward orthogonal least
+        exactly from the bordered interpolation system [Φ 1; 1ᵀ 0][w; b] = [y; 0] (LU; the
+        minimum-norm least-squares solution if that is singular), so it interpolates the
+        training data (MATLAB's ``/`` picks another of the exact solutions). ``"ols"`` — MATLAB ``newrb``: forward orthogonal least
         squares (Chen, Cowan, Grant 1991), adding the training vector that lowers the
         sum-squared error most, until the error reaches ``goal`` or ``max_neurons``.
         ``"kmeans"`` — k-means centres (k-means++ seeded by ``seed``), least-squares weights.

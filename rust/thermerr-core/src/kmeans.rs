@@ -67,19 +67,25 @@ pub fn kmeans_plus_plus(x: Samples<'_>, k: usize, seed: u64) -> Result<Matrix> {
 }
 
 fn assign(x: Samples<'_>, c: &Matrix, labels: &mut [usize]) -> f64 {
-    let mut inertia = 0.0;
-    for (i, r) in x.rows().enumerate() {
-        let mut best = (f64::INFINITY, 0);
-        for j in 0..c.nrows() {
-            let d = sq_dist(r, c.row(j));
-            if d < best.0 {
-                best = (d, j);
+    use rayon::prelude::*;
+    let best: Vec<(f64, usize)> = (0..x.nrows())
+        .into_par_iter()
+        .map(|i| {
+            let r = x.row(i);
+            let mut best = (f64::INFINITY, 0);
+            for j in 0..c.nrows() {
+                let d = sq_dist(r, c.row(j));
+                if d < best.0 {
+                    best = (d, j);
+                }
             }
-        }
-        labels[i] = best.1;
-        inertia += best.0;
+            best
+        })
+        .collect();
+    for (l, b) in labels.iter_mut().zip(&best) {
+        *l = b.1;
     }
-    inertia
+    best.iter().map(|b| b.0).sum()
 }
 
 /// Runs Lloyd's iteration from `init` (k × d).

@@ -2,7 +2,8 @@
 //! `radbas` convention, φ(r) = exp(−(b·r)²) with b = √(ln 2)/spread (so φ = 0.5 at r = spread),
 //! and a linear output with a bias, y = Σ wᵢ φ(‖x − cᵢ‖) + b₀.
 //!
-//! Designs: `Exact` (MATLAB `newrbe`: a neuron on every training sample), `Ols` (MATLAB `newrb`:
+//! Designs: `Exact` (MATLAB `newrbe`: a neuron on every training sample, bordered interpolation
+//! system with Σw = 0), `Ols` (MATLAB `newrb`:
 //! forward orthogonal least squares, Chen–Cowan–Grant 1991, adding the training vector that lowers
 //! the sum-squared error most — or, with `Rule::MaxError`, the one with the largest residual —
 //! until the goal or the neuron cap) and `KMeans` (k-means centres, least-squares weights).
@@ -11,9 +12,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::kmeans::{kmeans, kmeans_plus_plus};
-use crate::linalg::lstsq;
+use crate::linalg::{lstsq, solve};
 use crate::linear::check_features;
 use crate::samples::{check_target, sq_dist, Matrix, Samples};
+use rayon::prelude::*;
 
 /// √(−ln 0.5): MATLAB's radbas width constant (0.8326).
 pub const RADBAS: f64 = 0.832_554_611_157_697_7;
@@ -77,13 +79,20 @@ pub struct RbfNetwork {
 }
 
 fn design_matrix(x: Samples<'_>, centers: &Matrix, b: f64) -> faer::Mat<f64> {
-    faer::Mat::from_fn(x.nrows(), centers.nrows() + 1, |i, j| {
-        if j == centers.nrows() {
-            1.0
-        } else {
-            (-(b * b) * sq_dist(x.row(i), centers.row(j))).exp()
-        }
-    })
+    let k = centers.nrows();
+    let rows: Vec<Vec<f64>> = (0..x.nrows())
+        .into_par_iter()
+        .map(|i| {
+            (0..k)
+                .map(|j| (-(b * b) * sq_dist(x.row(i), centers.row(j))).exp())
+                .collect()
+        })
+        .collect();
+    faer::Mat::from_fn(
+        x.nrows(),
+        k + 1,
+        |i, j| if j == k { 1.0 } else { rows[i][j] },
+    )
 }
 
 fn rows_of(x: Samples<'_>, idx: &[usize]) -> Matrix {
@@ -137,8 +146,25 @@ impl RbfParams {
             Design::Exact => {
                 let idx: Vec<usize> = (0..n).collect();
                 let centers = rows_of(x, &idx);
+                // interpolation with a constant term: [Φ 1; 1ᵀ 0][w; b] = [y; 0] (Σw = 0 fixes
+                // the one degree of freedom the bias adds), solved by LU; if that system is
+                // singular to working precision, the minimum-norm least-squares solution
                 let a = design_matrix(x, &centers, b);
-                let sol = lstsq(a.as_ref(), y)?;
+                let sq = faer::Mat::from_fn(n + 1, n + 1, |i, j| {
+                    if i < n {
+                        a[(i, j)]
+                    } else if j < n {
+                        1.0
+                    } else {
+                        0.0
+                    }
+                });
+                let mut rhs = y.to_vec();
+                rhs.push(0.0);
+                let sol = match solve(sq.as_ref(), &rhs) {
+                    Ok(s) => s,
+                    Err(_) => lstsq(a.as_ref(), y)?,
+                };
                 Ok(self.finish(centers, sol, idx, Vec::new()))
             }
             Design::KMeans => {
@@ -267,7 +293,13 @@ impl RbfNetwork {
     pub fn predict(&self, x: Samples<'_>) -> Result<Vec<f64>> {
         check_features(x.ncols(), self.n_features())?;
         x.require_finite("X")?;
-        Ok(x.rows().map(|r| self.predict_one(r)).collect())
+        if x.nrows() * self.weights.len() * x.ncols() < 1 << 16 {
+            return Ok(x.rows().map(|r| self.predict_one(r)).collect());
+        }
+        Ok((0..x.nrows())
+            .into_par_iter()
+            .map(|i| self.predict_one(x.row(i)))
+            .collect())
     }
 }
 
