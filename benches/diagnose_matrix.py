@@ -41,7 +41,7 @@ def main() -> None:
                 if c.column:
                     col_n += 1
                     col_ok += d.column == c.column
-    print(f"{'hidden \\ verdict':<20}" + "".join(f"{v[:12]:>13}" for v in verdicts) + "   mean gain %")
+    print(f"{'hidden / verdict':<20}" + "".join(f"{v[:12]:>13}" for v in verdicts) + "   mean gain %")
     for h in syn.HIDDEN:
         print(f"{h:<20}" + "".join(f"{table[h][v]:>13}" for v in verdicts) + f"   {sum(gains[h]) / len(gains[h]):8.1f}")
     print(f"column right: {col_ok}/{col_n}; time per diagnosis: mean {sum(times) / len(times):.2f} s, max {max(times):.2f} s")

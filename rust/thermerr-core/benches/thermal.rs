@@ -37,7 +37,7 @@ fn run(n_nodes: usize, steps: usize) -> Run {
         .collect();
     let amb: Vec<f64> = t
         .iter()
-        .map(|v| 20.0 + (v / 86400.0 * 6.28).sin())
+        .map(|v| 20.0 + (v / 86400.0 * std::f64::consts::TAU).sin())
         .collect();
     let mut names = vec![
         "time_s".to_string(),
