@@ -26,6 +26,7 @@ from .preprocessing import AGORegressor, MinMaxAGO, spread_search
 from .rbf import RBFNetwork
 from .run import Run, read_run
 from .selection import SensorSelection, select_sensors
+from .thermal import Diagnosis, Machine, Simulation, diagnose
 
 __all__ = [
     "__version__",
@@ -44,6 +45,10 @@ __all__ = [
     "MinMaxAGO",
     "AGORegressor",
     "spread_search",
+    "Machine",
+    "Simulation",
+    "Diagnosis",
+    "diagnose",
     "ThermerrError",
     "ParameterError",
     "ShapeError",

@@ -97,7 +97,7 @@ class Run:
     def slice(self, start: int | None = None, stop: int | None = None) -> Run:
         """Rows ``start:stop`` as a new run (time is kept as measured)."""
         sl = slice(start, stop)
-        parts = {
+        parts: dict[str, Any] = {
             "source": self.source,
             "time_s": self.time_s[sl].copy(),
             "names": self.names,
