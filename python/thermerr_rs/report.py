@@ -67,9 +67,17 @@ def _plots(series: dict[str, Any], report: dict[str, Any]) -> list[tuple[str, st
     cands = report.get("candidates", [])
     if cands:
         fig, ax = plt.subplots(figsize=(9, 0.45 * len(cands) + 1.2))
-        labels = [c["cause"] + (f" ({c['column']})" if c.get("column") else "") for c in cands]
+        cands = sorted(cands, key=lambda c: -c["gain_pct"])
+
+        def label(c: dict[str, Any]) -> str:
+            parts = (c.get("column"),) if c["cause"] == "sensor_drift" else (c.get("column"), c.get("node"))
+            where = [w for w in parts if w]
+            return c["cause"] + (f" ({' → '.join(where)})" if where else "")
+
+        labels = [label(c) for c in cands]
         gains = [c["gain_pct"] for c in cands]
-        colors = ["tab:green" if c["cause"] == verdict and c.get("column") == report.get("column") else "0.6" for c in cands]
+        best = report["candidates"][0] if verdict not in ("none", "unexplained") else None
+        colors = ["tab:green" if best is not None and c is best else "0.6" for c in cands]
         ax.barh(labels[::-1], gains[::-1], color=colors[::-1])
         ax.axvline(0, color="0.3", lw=0.6)
         ax.set_xlabel("gain on the held-out data (%): 1 − RMS(extended)/RMS(baseline)")
