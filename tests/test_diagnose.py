@@ -78,9 +78,14 @@ def test_without_holdout_uses_the_end_of_the_run_and_writes_the_report(tmp_path,
     html = (out / "report.html").read_text()
     assert html.index("Verdict") < html.index("<img") and html.count("data:image/png;base64") >= 3
     # both machines load back and simulate with the same code, giving the reported figures
-    ext = Machine.load(out / "extended.toml")
-    Machine.load(out / "calibrated.toml")
-    assert ext.to_toml().count("[[drift.inputs]]") == 1
+    full = tr.read_run(run)
+    split = round(len(full) * 0.7)
+    for name, key in (("extended.toml", "extended"), ("calibrated.toml", "baseline")):
+        sim = Machine.load(out / name).simulate(full, fit_initial=20)
+        r = full["E_z"][split:] - sim.drift["E_z"][split:]
+        # same code, same numbers: only the TOML's decimal round trip separates them
+        assert np.sqrt(np.mean(r**2)) == pytest.approx(rep[key]["rmse_um"], rel=1e-9)
+    assert Machine.load(out / "extended.toml").to_toml().count("[[drift.inputs]]") == 1
 
 
 def test_report_write_is_atomic(tmp_path, monkeypatch):

@@ -292,10 +292,13 @@ fn score(
     window: usize,
 ) -> Result<Holdout> {
     let m = &cal.machine;
-    let (run, init, from) = match hold {
-        Some(h) => (h, fit_initial_offsets(m, h, window)?, 0),
-        None => (train, cal.init.clone(), split),
+    // the start is estimated from the first readings, as `Machine.simulate(run, fit_initial=N)`
+    // does, so the reported figures can be reproduced from the written TOML alone
+    let (run, from) = match hold {
+        Some(h) => (h, 0),
+        None => (train, split),
     };
+    let init = fit_initial_offsets(m, run, window)?;
     let tg = targets(m, run, axis)?;
     let (_, sim, _) = evaluate(
         m,
