@@ -211,8 +211,136 @@ impl FcmValidParams {
             }
             None => random_partition(n, c, self.seed),
         };
-        Fcm::new(x, c, self.m).run(u0, self.tol, self.max_iter)
+        let d = x.ncols();
+        if n.saturating_mul(4) <= d && n <= GRAM_MAX_OBJECTS {
+            gram_run(x, c, self.m, u0, self.tol, self.max_iter)
+        } else {
+            Fcm::new(x, c, self.m).run(u0, self.tol, self.max_iter)
+        }
     }
+}
+
+/// Objects at most this many (and at most a quarter of the features) take the Gram path: its
+/// O(n²d) set-up costs about n/20 direct iterations, repaid within a typical fit.
+const GRAM_MAX_OBJECTS: usize = 256;
+
+/// The same iteration for few objects with many features (sensor series: 20 objects of hundreds
+/// of samples). Every centre is a weighted mean of the objects, so with the Gram matrix
+/// G = X̃X̃ᵀ of the mean-centred objects, ‖x_k − v_i‖² = G_kk − 2(GW)_ki/s_i + (WᵀGW)_ii/s_i²:
+/// one O(n²d) product up front, then O(n²c) per iteration instead of O(ndc). The centres
+/// themselves are formed once, at the end.
+fn gram_run(
+    x: Samples<'_>,
+    c: usize,
+    m: f64,
+    u0: Vec<f64>,
+    tol: f64,
+    max_iter: usize,
+) -> Result<FuzzyCMeans> {
+    let (n, d) = (x.nrows(), x.ncols());
+    let mut mean = vec![0.0; d];
+    for r in x.rows() {
+        for (a, v) in mean.iter_mut().zip(r) {
+            *a += v;
+        }
+    }
+    mean.iter_mut().for_each(|v| *v /= n as f64);
+    let xc = faer::Mat::from_fn(n, d, |i, j| x.get(i, j) - mean[j]);
+    let g = &xc * xc.transpose();
+    let mut u_prev: Vec<f64> = u0.iter().map(|v| v.max(EPS)).collect();
+    let mut u_new = vec![0.0; n * c];
+    let mut w = vec![0.0; n * c];
+    let mut gw = vec![0.0; n * c];
+    let mut dist = vec![0.0; n * c];
+    let mut history = Vec::new();
+    let mut converged = false;
+    let mut n_iter = 0;
+    while n_iter < max_iter {
+        n_iter += 1;
+        for (wr, ur) in w.chunks_exact_mut(c).zip(u_prev.chunks_exact(c)) {
+            weights(ur, wr, m);
+        }
+        let mut s = vec![0.0; c];
+        for wr in w.chunks_exact(c) {
+            for (a, v) in s.iter_mut().zip(wr) {
+                *a += v;
+            }
+        }
+        for k in 0..n {
+            for i in 0..c {
+                let mut acc = 0.0;
+                for l in 0..n {
+                    acc += g[(k, l)] * w[l * c + i];
+                }
+                gw[k * c + i] = acc;
+            }
+        }
+        let mut vv = vec![0.0; c];
+        for k in 0..n {
+            for i in 0..c {
+                vv[i] += w[k * c + i] * gw[k * c + i];
+            }
+        }
+        let mut objective = 0.0;
+        for k in 0..n {
+            for i in 0..c {
+                let d2 = g[(k, k)] - 2.0 * gw[k * c + i] / s[i] + vv[i] / (s[i] * s[i]);
+                let dk = d2.max(0.0).sqrt().max(EPS);
+                dist[k * c + i] = dk;
+                objective += w[k * c + i] * dk * dk;
+            }
+        }
+        history.push(objective);
+        for (ur, dr) in u_new.chunks_exact_mut(c).zip(dist.chunks_exact(c)) {
+            memberships(dr, ur, m);
+        }
+        let delta = u_new
+            .iter()
+            .zip(&u_prev)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt();
+        std::mem::swap(&mut u_prev, &mut u_new);
+        if delta < tol {
+            converged = true;
+            break;
+        }
+    }
+    if let Err(e) = check_finite(&u_prev, c, "membership") {
+        return Err(Error::Numerical(format!("fuzzy c-means diverged ({e})")));
+    }
+    // centres of the last iteration: from the weights that produced its distances
+    let mut s = vec![0.0; c];
+    let mut centers = vec![0.0; c * d];
+    for (k, r) in x.rows().enumerate() {
+        for i in 0..c {
+            let wk = w[k * c + i];
+            s[i] += wk;
+            for (a, v) in centers[i * d..(i + 1) * d].iter_mut().zip(r) {
+                *a += wk * v;
+            }
+        }
+    }
+    for i in 0..c {
+        centers[i * d..(i + 1) * d]
+            .iter_mut()
+            .for_each(|v| *v /= s[i]);
+    }
+    Ok(FuzzyCMeans {
+        m,
+        centers: Matrix {
+            shape: [c, d],
+            data: centers,
+        },
+        membership: Matrix {
+            shape: [n, c],
+            data: u_prev,
+        },
+        n_iter,
+        objective: history.last().copied().unwrap_or(f64::NAN),
+        history,
+        converged,
+    })
 }
 
 /// Uniform random memberships, each row normalised to sum 1 (drawn object by object).
