@@ -306,9 +306,6 @@ fn gram_run(
             break;
         }
     }
-    if let Err(e) = check_finite(&u_prev, c, "membership") {
-        return Err(Error::Numerical(format!("fuzzy c-means diverged ({e})")));
-    }
     // centres of the last iteration: from the weights that produced its distances
     let mut s = vec![0.0; c];
     let mut centers = vec![0.0; c * d];
@@ -326,6 +323,24 @@ fn gram_run(
             .iter_mut()
             .for_each(|v| *v /= s[i]);
     }
+    fitted(m, centers, c, d, u_prev, n_iter, history, converged)
+}
+
+/// The fitted model, refusing a partition that diverged to non-finite values.
+#[allow(clippy::too_many_arguments)]
+fn fitted(
+    m: f64,
+    centers: Vec<f64>,
+    c: usize,
+    d: usize,
+    u: Vec<f64>,
+    n_iter: usize,
+    history: Vec<f64>,
+    converged: bool,
+) -> Result<FuzzyCMeans> {
+    if let Err(e) = check_finite(&u, c, "membership") {
+        return Err(Error::Numerical(format!("fuzzy c-means diverged ({e})")));
+    }
     Ok(FuzzyCMeans {
         m,
         centers: Matrix {
@@ -333,8 +348,8 @@ fn gram_run(
             data: centers,
         },
         membership: Matrix {
-            shape: [n, c],
-            data: u_prev,
+            shape: [u.len() / c.max(1), c],
+            data: u,
         },
         n_iter,
         objective: history.last().copied().unwrap_or(f64::NAN),
@@ -441,24 +456,7 @@ impl<'a> Fcm<'a> {
                 self.reduce(&mut centers)?;
             }
         }
-        if let Err(e) = check_finite(&u_prev, c, "membership") {
-            return Err(Error::Numerical(format!("fuzzy c-means diverged ({e})")));
-        }
-        Ok(FuzzyCMeans {
-            m,
-            centers: Matrix {
-                shape: [c, d],
-                data: centers,
-            },
-            membership: Matrix {
-                shape: [n, c],
-                data: u_prev,
-            },
-            n_iter,
-            objective: history.last().copied().unwrap_or(f64::NAN),
-            history,
-            converged,
-        })
+        fitted(m, centers, c, d, u_prev, n_iter, history, converged)
     }
 
     /// Runs `f` on every group, in parallel when the problem is large enough, handing it the
