@@ -18,6 +18,7 @@ echo
 echo "== 2. Sensor selection and a compensation model (HMC, 20 sensors, held-out second run)"
 thermerr fit examples/hmc_run1.csv --axis E_z --model rbf --sensors auto --test examples/hmc_run2.csv --out out/rbf.json
 echo
+echo "-- the same 4 sensors, multiple linear regression:"
 thermerr fit examples/hmc_run1.csv --axis E_z --model mlr --sensors auto --test examples/hmc_run2.csv --out out/mlr.json --quiet
 
 echo
