@@ -114,7 +114,9 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({"axis": target, **s.as_dict()}, indent=1))
     else:
-        print(f"{model.kind or type(model).__name__} model {args.model} on {run.source}, axis {target}:")
+        inner = getattr(model, "estimator", model)
+        pre = f" ({type(model).__name__})" if inner is not model else ""
+        print(f"{inner.kind} model{pre} {args.model} on {run.source}, axis {target}:")
         print("  " + str(s).replace("\n", "\n  "))
     return 0
 

@@ -129,8 +129,8 @@ fn bad(file: &str, entry: impl Into<String>, reason: impl Into<String>) -> Error
         file: file.to_string(),
         line: None,
         row: None,
-        column: Some(entry.into()),
-        reason: reason.into(),
+        column: None,
+        reason: format!("{}: {}", entry.into(), reason.into()),
     }
 }
 
