@@ -14,6 +14,7 @@ pub mod optim;
 pub mod rbf;
 pub mod run;
 pub mod samples;
+pub mod swarm;
 pub mod thermal;
 
 pub use error::{Error, Result};
