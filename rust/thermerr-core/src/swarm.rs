@@ -604,3 +604,477 @@ where
         params,
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sphere(x: &[f64]) -> f64 {
+        x.iter().map(|v| v * v).sum()
+    }
+
+    /// Sphere centred at (0.5, 1.0, 1.5, …) off the origin, where CSO's multiplicative rooster
+    /// move has no advantage.
+    fn shifted_sphere(x: &[f64]) -> f64 {
+        x.iter()
+            .enumerate()
+            .map(|(j, v)| (v - 0.5 * (j + 1) as f64).powi(2))
+            .sum()
+    }
+
+    fn rosenbrock(x: &[f64]) -> f64 {
+        x.windows(2)
+            .map(|w| 100.0 * (w[1] - w[0] * w[0]).powi(2) + (1.0 - w[0]).powi(2))
+            .sum()
+    }
+
+    fn rastrigin(x: &[f64]) -> f64 {
+        10.0 * x.len() as f64
+            + x.iter()
+                .map(|v| v * v - 10.0 * (std::f64::consts::TAU * v).cos())
+                .sum::<f64>()
+    }
+
+    fn cso(pop: usize, iters: usize, seed: u64) -> CsoParams {
+        CsoParams {
+            pop,
+            iters,
+            seed,
+            ..CsoParams::default()
+        }
+    }
+
+    fn pso(pop: usize, iters: usize, seed: u64) -> PsoParams {
+        PsoParams {
+            pop,
+            iters,
+            seed,
+            ..PsoParams::default()
+        }
+    }
+
+    type Problem = (&'static str, fn(&[f64]) -> f64, Bounds, usize, usize);
+
+    fn problems() -> Vec<Problem> {
+        vec![
+            ("sphere2", sphere, Bounds::uniform(2, -5.12, 5.12), 20, 100),
+            (
+                "sphere10",
+                sphere,
+                Bounds::uniform(10, -5.12, 5.12),
+                30,
+                300,
+            ),
+            (
+                "shifted2",
+                shifted_sphere,
+                Bounds::uniform(2, -10.0, 10.0),
+                20,
+                100,
+            ),
+            (
+                "shifted10",
+                shifted_sphere,
+                Bounds::uniform(10, -10.0, 10.0),
+                30,
+                300,
+            ),
+            (
+                "rosen2",
+                rosenbrock,
+                Bounds::uniform(2, -2.048, 2.048),
+                30,
+                300,
+            ),
+            (
+                "rastr2",
+                rastrigin,
+                Bounds::uniform(2, -5.12, 5.12),
+                20,
+                100,
+            ),
+            (
+                "rastr5",
+                rastrigin,
+                Bounds::uniform(5, -5.12, 5.12),
+                40,
+                300,
+            ),
+            (
+                "rastr5big",
+                rastrigin,
+                Bounds::uniform(5, -5.12, 5.12),
+                100,
+                500,
+            ),
+        ]
+    }
+
+    /// Prints the best value for seeds 0..20 on every problem (used to choose the budgets and
+    /// tolerances of the tests below):
+    /// `cargo test --release -p thermerr-core swarm::tests::measure -- --ignored --nocapture`.
+    #[test]
+    #[ignore]
+    fn measure() {
+        for (name, f, b, pop, iters) in problems() {
+            let c: Vec<f64> = (0..20)
+                .map(|s| cso_minimize(f, &b, &cso(pop, iters, s)).unwrap().f)
+                .collect();
+            let p: Vec<f64> = (0..20)
+                .map(|s| pso_minimize(f, &b, &pso(pop, iters, s)).unwrap().f)
+                .collect();
+            let fmt = |v: &[f64]| {
+                v.iter()
+                    .map(|y| format!("{y:.1e}"))
+                    .collect::<Vec<_>>()
+                    .join(" ")
+            };
+            println!("{name} {pop}x{iters}\n  cso {}\n  pso {}", fmt(&c), fmt(&p));
+        }
+    }
+
+    /// Best values of seeds `0..n`.
+    fn cso_runs(f: fn(&[f64]) -> f64, b: &Bounds, pop: usize, iters: usize, n: u64) -> Vec<f64> {
+        (0..n)
+            .map(|s| cso_minimize(f, b, &cso(pop, iters, s)).unwrap().f)
+            .collect()
+    }
+
+    fn pso_runs(f: fn(&[f64]) -> f64, b: &Bounds, pop: usize, iters: usize, n: u64) -> Vec<f64> {
+        (0..n)
+            .map(|s| pso_minimize(f, b, &pso(pop, iters, s)).unwrap().f)
+            .collect()
+    }
+
+    fn max(v: &[f64]) -> f64 {
+        v.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+    }
+
+    fn count_below(v: &[f64], tol: f64) -> usize {
+        v.iter().filter(|&&y| y < tol).count()
+    }
+
+    // Measured values below: release build, seeds 0..20 (`measure`).
+
+    #[test]
+    fn sphere_d2() {
+        let b = Bounds::uniform(2, -5.12, 5.12);
+        // 20 × 100: CSO max over 20 seeds 1.0e-28, PSO max 9.7e-11
+        assert!(max(&cso_runs(sphere, &b, 20, 100, 20)) < 1e-20);
+        assert!(max(&pso_runs(sphere, &b, 20, 100, 20)) < 1e-8);
+    }
+
+    #[test]
+    fn sphere_d10() {
+        let b = Bounds::uniform(10, -5.12, 5.12);
+        // 30 × 300: CSO max over 20 seeds 5.0e-31, PSO max 4.7e-14
+        assert!(max(&cso_runs(sphere, &b, 30, 300, 20)) < 1e-20);
+        assert!(max(&pso_runs(sphere, &b, 30, 300, 20)) < 1e-10);
+    }
+
+    #[test]
+    fn shifted_sphere_d2_off_origin() {
+        // optimum at (0.5, 1.0), away from the origin that CSO's rooster move favours
+        let b = Bounds::uniform(2, -10.0, 10.0);
+        // 20 × 100: CSO 19 of 20 seeds <= 2.4e-17, seed 15 stalls at 3.3e-4; PSO max 5.6e-10
+        let c = cso_runs(shifted_sphere, &b, 20, 100, 20);
+        assert!(count_below(&c, 1e-12) >= 18, "{c:?}");
+        assert!(max(&c) < 1e-2, "{c:?}");
+        assert!(max(&pso_runs(shifted_sphere, &b, 20, 100, 20)) < 1e-8);
+        let r = cso_minimize(shifted_sphere, &b, &cso(20, 100, 0)).unwrap();
+        assert!((r.x[0] - 0.5).abs() < 1e-6 && (r.x[1] - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn rosenbrock_d2() {
+        let b = Bounds::uniform(2, -2.048, 2.048);
+        // 30 × 300: CSO max over 20 seeds 4.2e-11, PSO max 6.0e-10
+        assert!(max(&cso_runs(rosenbrock, &b, 30, 300, 20)) < 1e-8);
+        assert!(max(&pso_runs(rosenbrock, &b, 30, 300, 20)) < 1e-7);
+        for r in [
+            cso_minimize(rosenbrock, &b, &cso(30, 300, 1)).unwrap(),
+            pso_minimize(rosenbrock, &b, &pso(30, 300, 1)).unwrap(),
+        ] {
+            assert!((r.x[0] - 1.0).abs() < 1e-3 && (r.x[1] - 1.0).abs() < 1e-3);
+        }
+    }
+
+    #[test]
+    fn rastrigin_d2() {
+        let b = Bounds::uniform(2, -5.12, 5.12);
+        // 20 × 100: CSO max over 20 seeds 3.9e-13 (19 seeds exactly 0);
+        // PSO 19 of 20 seeds <= 2.4e-5, seed 4 in the local minimum 0.995
+        assert!(max(&cso_runs(rastrigin, &b, 20, 100, 20)) < 1e-9);
+        let p = pso_runs(rastrigin, &b, 20, 100, 20);
+        assert!(count_below(&p, 1e-4) >= 18, "{p:?}");
+        assert!(max(&p) < 1.5, "{p:?}");
+    }
+
+    #[test]
+    fn rastrigin_d5() {
+        let b = Bounds::uniform(5, -5.12, 5.12);
+        // 40 × 300: CSO exactly 0 on all 20 seeds
+        assert!(max(&cso_runs(rastrigin, &b, 40, 300, 20)) < 1e-9);
+        // PSO is trapped in local minima at 40 × 300 (0 on 2 of 20 seeds, else 0.995 or 1.99);
+        // at 100 × 500 it reaches < 1e-9 on 15 of 20 seeds, the other 5 at 0.995
+        let p = pso_runs(rastrigin, &b, 100, 500, 20);
+        assert!(count_below(&p, 1e-6) >= 12, "{p:?}");
+        assert!(max(&p) < 1.5, "{p:?}");
+    }
+
+    fn same_bits(a: &SwarmResult, b: &SwarmResult) -> bool {
+        let bits = |v: &[f64]| v.iter().map(|y| y.to_bits()).collect::<Vec<_>>();
+        bits(&a.x) == bits(&b.x)
+            && a.f.to_bits() == b.f.to_bits()
+            && bits(&a.history) == bits(&b.history)
+            && a.n_evals == b.n_evals
+    }
+
+    #[test]
+    fn same_seed_same_bits_other_seed_differs() {
+        let b = Bounds::uniform(3, -5.12, 5.12);
+        let c = |s| cso_minimize(rastrigin, &b, &cso(20, 50, s)).unwrap();
+        let p = |s| pso_minimize(rastrigin, &b, &pso(20, 50, s)).unwrap();
+        assert!(same_bits(&c(7), &c(7)));
+        assert!(same_bits(&p(7), &p(7)));
+        assert!(!same_bits(&c(7), &c(8)));
+        assert!(!same_bits(&p(7), &p(8)));
+        assert!(c(7).x != c(8).x && p(7).x != p(8).x);
+    }
+
+    #[test]
+    fn batch_and_parallel_identical() {
+        let b = Bounds::from_pairs(&[(-5.0, 10.0), (-2.0, 3.0), (0.0, 4.0), (-1.0, 1.0)]);
+        let serial = |pop: &[Vec<f64>]| Ok(pop.iter().map(|x| rosenbrock(x)).collect());
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        for seed in [0, 1, 42] {
+            let cp = cso(17, 40, seed);
+            let pp = pso(17, 40, seed);
+            let cb = cso_minimize_batch(serial, &b, &cp).unwrap();
+            let pb = pso_minimize_batch(serial, &b, &pp).unwrap();
+            let (cpar, ppar) = pool.install(|| {
+                (
+                    cso_minimize(rosenbrock, &b, &cp).unwrap(),
+                    pso_minimize(rosenbrock, &b, &pp).unwrap(),
+                )
+            });
+            assert!(same_bits(&cb, &cpar));
+            assert!(same_bits(&pb, &ppar));
+            assert!(same_bits(&cb, &cso_minimize(rosenbrock, &b, &cp).unwrap()));
+        }
+    }
+
+    #[test]
+    fn result_shape_history_and_bounds() {
+        let b = Bounds::from_pairs(&[(1.0, 2.0), (-3.0, -2.5)]);
+        let c = cso_minimize(sphere, &b, &cso(12, 25, 3)).unwrap();
+        let p = pso_minimize(sphere, &b, &pso(12, 25, 3)).unwrap();
+        for r in [&c, &p] {
+            assert_eq!(r.history.len(), 25);
+            assert_eq!(r.n_evals, 12 * 26);
+            assert!(r.history.windows(2).all(|w| w[1] <= w[0]));
+            assert_eq!(*r.history.last().unwrap(), r.f);
+            assert_eq!(r.f, sphere(&r.x));
+            for j in 0..2 {
+                assert!(b.lower[j] <= r.x[j] && r.x[j] <= b.upper[j]);
+            }
+            // the constrained optimum is the corner (1, -2.5)
+            assert!((r.x[0] - 1.0).abs() < 1e-6 && (r.x[1] + 2.5).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn bad_params_are_errors() {
+        let b = Bounds::uniform(2, -1.0, 1.0);
+        let ok = CsoParams::default();
+        let bad_cso = [
+            CsoParams {
+                pop: 1,
+                ..ok.clone()
+            },
+            CsoParams {
+                iters: 0,
+                ..ok.clone()
+            },
+            CsoParams { g: 0, ..ok.clone() },
+            CsoParams {
+                roosters: 0.01,
+                ..ok.clone()
+            }, // round(0.2) = 0 roosters
+            CsoParams {
+                hens: 0.0,
+                ..ok.clone()
+            }, // chicks 0.8 → no hen
+            CsoParams {
+                roosters: 0.7,
+                hens: 0.6,
+                ..ok.clone()
+            },
+            CsoParams {
+                roosters: f64::NAN,
+                ..ok.clone()
+            },
+            CsoParams {
+                hens: -0.1,
+                ..ok.clone()
+            },
+            CsoParams {
+                fl: (1.0, 0.4),
+                ..ok.clone()
+            },
+            CsoParams {
+                fl: (0.4, f64::INFINITY),
+                ..ok.clone()
+            },
+        ];
+        for p in &bad_cso {
+            assert!(
+                matches!(cso_minimize(sphere, &b, p), Err(Error::InvalidParam { .. })),
+                "{p:?}"
+            );
+        }
+        let okp = PsoParams::default();
+        let bad_pso = [
+            PsoParams {
+                pop: 0,
+                ..okp.clone()
+            },
+            PsoParams {
+                iters: 0,
+                ..okp.clone()
+            },
+            PsoParams {
+                w: f64::NAN,
+                ..okp.clone()
+            },
+            PsoParams {
+                c1: -1.0,
+                ..okp.clone()
+            },
+            PsoParams {
+                c2: f64::INFINITY,
+                ..okp.clone()
+            },
+            PsoParams {
+                vmax_frac: 0.0,
+                ..okp.clone()
+            },
+        ];
+        for p in &bad_pso {
+            assert!(
+                matches!(pso_minimize(sphere, &b, p), Err(Error::InvalidParam { .. })),
+                "{p:?}"
+            );
+        }
+        let bad_bounds = [
+            Bounds::new(vec![], vec![]),
+            Bounds::new(vec![0.0, 0.0], vec![1.0]),
+            Bounds::new(vec![0.0, 1.0], vec![1.0, 1.0]),
+            Bounds::new(vec![0.0, 2.0], vec![1.0, 1.0]),
+            Bounds::new(vec![f64::NAN], vec![1.0]),
+            Bounds::new(vec![f64::NEG_INFINITY], vec![1.0]),
+            Bounds::new(vec![-f64::MAX], vec![f64::MAX]), // range overflows
+        ];
+        for bb in &bad_bounds {
+            assert!(matches!(
+                cso_minimize(sphere, bb, &ok),
+                Err(Error::InvalidParam { .. })
+            ));
+            assert!(matches!(
+                pso_minimize(sphere, bb, &okp),
+                Err(Error::InvalidParam { .. })
+            ));
+        }
+        // smallest valid swarms: one rooster and one hen; one particle
+        let tiny = CsoParams {
+            pop: 2,
+            roosters: 0.5,
+            hens: 0.5,
+            ..ok.clone()
+        };
+        assert!(cso_minimize(sphere, &b, &tiny).is_ok());
+        assert!(pso_minimize(sphere, &b, &PsoParams { pop: 1, ..okp }).is_ok());
+    }
+
+    #[test]
+    fn batch_errors_are_returned() {
+        let b = Bounds::uniform(2, -1.0, 1.0);
+        let short = |pop: &[Vec<f64>]| Ok(vec![0.0; pop.len() - 1]);
+        assert!(matches!(
+            cso_minimize_batch(short, &b, &CsoParams::default()),
+            Err(Error::Shape(_))
+        ));
+        assert!(matches!(
+            pso_minimize_batch(short, &b, &PsoParams::default()),
+            Err(Error::Shape(_))
+        ));
+        // an error in a later generation aborts the search with that error
+        let mut calls = 0;
+        let failing = |pop: &[Vec<f64>]| {
+            calls += 1;
+            if calls == 3 {
+                Err(Error::Numerical("objective failed".into()))
+            } else {
+                Ok(pop.iter().map(|x| sphere(x)).collect())
+            }
+        };
+        assert!(matches!(
+            cso_minimize_batch(failing, &b, &CsoParams::default()),
+            Err(Error::Numerical(_))
+        ));
+    }
+
+    #[test]
+    fn non_finite_objective_counts_as_infinity() {
+        let b = Bounds::uniform(3, -2.0, 2.0);
+        // all NaN: no panic, f = +inf, x the first initial point (inside the box)
+        let c = cso_minimize(|_| f64::NAN, &b, &cso(10, 20, 0)).unwrap();
+        let p = pso_minimize(|_| f64::NAN, &b, &pso(10, 20, 0)).unwrap();
+        for r in [&c, &p] {
+            assert_eq!(r.f, f64::INFINITY);
+            assert!(r.x.iter().all(|v| (-2.0..=2.0).contains(v)));
+            assert!(r.history.iter().all(|&h| h == f64::INFINITY));
+        }
+        // NaN or -inf on half the box: the minimiser stays in the other half
+        let half = |x: &[f64]| {
+            if x[0] > 0.0 {
+                f64::NAN
+            } else if x[1] > 1.0 {
+                f64::NEG_INFINITY
+            } else {
+                sphere(x)
+            }
+        };
+        let c = cso_minimize(half, &b, &cso(20, 50, 1)).unwrap();
+        let p = pso_minimize(half, &b, &pso(20, 50, 1)).unwrap();
+        for r in [&c, &p] {
+            assert!(r.f.is_finite() && r.f < 1e-3, "{r:?}");
+            assert!(r.x[0] <= 0.0 && r.x[1] <= 1.0);
+        }
+    }
+
+    #[test]
+    fn huge_and_mixed_sign_values_stay_finite() {
+        // objective differences far beyond exp's range, of both signs: factors are capped
+        let b = Bounds::uniform(4, -1e300, 1e300);
+        let f = |x: &[f64]| {
+            let s = x.iter().sum::<f64>();
+            if s > 0.0 {
+                -1e300 * (1.0 + x[0].abs() / 1e300)
+            } else {
+                1e300 - s.abs()
+            }
+        };
+        for seed in 0..5 {
+            let c = cso_minimize(f, &b, &cso(20, 30, seed)).unwrap();
+            let p = pso_minimize(f, &b, &pso(20, 30, seed)).unwrap();
+            for r in [&c, &p] {
+                assert!(r.f.is_finite() && r.f < 0.0, "{r:?}");
+                assert!(r.x.iter().all(|v| v.is_finite() && v.abs() <= 1e300));
+            }
+        }
+    }
+}
