@@ -53,6 +53,13 @@
 //!   [`EXP_CAP`] so that the factors stay finite (see there); where f_i = +∞ the ratios
 //!   `(a − b)/|f_i|` take their limit ±1 and ∞ − ∞ is taken as 0.
 //!
+//! **Behaviour to know about** (measured with the `measure` test, seeds 0..20): the rooster move
+//! scales with |p_i|, so a coordinate at 0 stays there and CSO is strongly drawn to the origin.
+//! On problems whose optimum is the origin (sphere, Rastrigin) it reaches it to 1e-28 or exactly
+//! 0; off the origin it is much weaker in higher dimension: on a sphere centred at
+//! (0.5, 1, …, 5) in d = 10, box [−10, 10], 30 × 300, CSO stalls at a median 3.9 (2.2 after 1500
+//! generations) where PSO reaches 1.6e-14. In d = 2 (shifted sphere, Rosenbrock) it converges.
+//!
 //! # PSO
 //!
 //! Global-best PSO with inertia (Shi & Eberhart; defaults are Clerc's constriction values
@@ -511,6 +518,11 @@ where
 
 /// Chicken swarm optimisation with `f` evaluated on each generation in parallel (rayon). Gives
 /// the same result, bit for bit, as [`cso_minimize_batch`] with a serial evaluation of `f`.
+///
+/// Dispatching a generation to rayon costs some microseconds; for an objective as cheap as an
+/// analytic test function the batch entry point with a serial loop is faster (bench `swarm`:
+/// Rastrigin d = 2, 20 × 100, about 0.1 ms serial against 1.7 ms through rayon on a loaded
+/// 2-core machine). Use this one when one evaluation costs well above that.
 pub fn cso_minimize<F>(f: F, bounds: &Bounds, params: &CsoParams) -> Result<SwarmResult>
 where
     F: Fn(&[f64]) -> f64 + Sync,
@@ -594,6 +606,7 @@ where
 
 /// Global-best particle swarm with `f` evaluated on each generation in parallel (rayon). Gives
 /// the same result, bit for bit, as [`pso_minimize_batch`] with a serial evaluation of `f`.
+/// The same remark on cheap objectives as for [`cso_minimize`] applies.
 pub fn pso_minimize<F>(f: F, bounds: &Bounds, params: &PsoParams) -> Result<SwarmResult>
 where
     F: Fn(&[f64]) -> f64 + Sync,
