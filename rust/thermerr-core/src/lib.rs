@@ -4,16 +4,27 @@
 //! defaults) → `check()` → `XValidParams` → `fit(samples)` → a fitted model that is plain,
 //! serialisable data with a `predict` that checks its input.
 
+//!
+//! With the default feature `fit` off, only the fitted models' prediction code is built (no faer,
+//! no rayon): `thermerr-edge` uses exactly that, so the edge and the library share one `predict`
+//! per model kind.
+
 pub mod error;
+#[cfg(feature = "fit")]
 pub mod fcm;
+#[cfg(feature = "fit")]
 pub mod kmeans;
+#[cfg(feature = "fit")]
 pub mod linalg;
 pub mod linear;
 pub mod metrics;
+#[cfg(feature = "fit")]
 pub mod optim;
 pub mod rbf;
+#[cfg(feature = "fit")]
 pub mod run;
 pub mod samples;
+#[cfg(feature = "fit")]
 pub mod thermal;
 
 pub use error::{Error, Result};
