@@ -26,6 +26,7 @@ from .preprocessing import AGORegressor, MinMaxAGO, spread_search
 from .rbf import RBFNetwork
 from .run import Run, read_run
 from .selection import SensorSelection, select_sensors
+from .svr import SVR
 from .thermal import Diagnosis, Machine, Simulation, diagnose
 
 __all__ = [
@@ -45,6 +46,7 @@ __all__ = [
     "MinMaxAGO",
     "AGORegressor",
     "spread_search",
+    "SVR",
     "Machine",
     "Simulation",
     "Diagnosis",

@@ -153,3 +153,39 @@ class MachineModel:
         min_score: float = 0.1,
         noise_ratio: float = 2.0,
     ) -> dict[str, Any]: ...
+
+# --- support vector regression -------------------------------------------------------------------
+@final
+class SvrModel:
+    @staticmethod
+    def fit(
+        x: _F64,
+        y: _F64,
+        *,
+        c: float = 1.0,
+        epsilon: float = 0.1,
+        kernel: str = "rbf",
+        gamma: str | float = "scale",
+        tol: float = 1e-3,
+        shrinking: bool = True,
+        cache_size: float = 200.0,
+        max_iter: int | None = None,
+    ) -> SvrModel: ...
+    def predict(self, x: _F64) -> _F64: ...
+    @property
+    def support_vectors(self) -> _F64: ...
+    @property
+    def dual_coef(self) -> _F64: ...
+    @property
+    def support(self) -> list[int]: ...
+    @property
+    def intercept(self) -> float: ...
+    @property
+    def n_iter(self) -> int: ...
+    @property
+    def gamma(self) -> float | None: ...
+    @property
+    def n_features(self) -> int: ...
+    def to_json(self) -> str: ...
+    @staticmethod
+    def from_json(text: str) -> SvrModel: ...

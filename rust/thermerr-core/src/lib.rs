@@ -24,6 +24,7 @@ pub mod rbf;
 #[cfg(feature = "fit")]
 pub mod run;
 pub mod samples;
+pub mod svr;
 #[cfg(feature = "fit")]
 pub mod thermal;
 

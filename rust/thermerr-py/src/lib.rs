@@ -6,6 +6,7 @@ mod fcm;
 mod linear;
 mod rbf;
 mod run;
+mod svr;
 mod thermal;
 
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -51,6 +52,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     fcm::register(m)?;
     rbf::register(m)?;
     thermal::register(m)?;
+    svr::register(m)?;
     Ok(())
 }
 
