@@ -26,6 +26,7 @@ from .preprocessing import AGORegressor, MinMaxAGO, spread_search
 from .rbf import RBFNetwork
 from .run import Run, read_run
 from .selection import SensorSelection, select_sensors
+from .stiffness import StiffnessResult, key_thermal_stiffness
 from .svr import SVR
 from .thermal import Diagnosis, Machine, Simulation, diagnose
 
@@ -47,6 +48,8 @@ __all__ = [
     "AGORegressor",
     "spread_search",
     "SVR",
+    "key_thermal_stiffness",
+    "StiffnessResult",
     "Machine",
     "Simulation",
     "Diagnosis",

@@ -6,6 +6,7 @@
     thermerr predict RUN.csv --machine M.toml --out PRED.csv
     thermerr calibrate RUN.csv --machine M.toml --out CAL.toml
     thermerr diagnose RUN.csv --machine M.toml --out DIR [--holdout TEST.csv]
+    thermerr stiffness MODEL.json RUN.csv [--at SECONDS] [--eta 0.5]
 
 Bad input ends with a one-line message on stderr and exit status 2.
 """
@@ -183,6 +184,19 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_stiffness(args: argparse.Namespace) -> int:
+    from .stiffness import key_thermal_stiffness
+
+    model = load_model(args.model)
+    run = read_run(args.run, nan=args.nan)
+    res = key_thermal_stiffness(model, run, at=args.at, eta=args.eta, target=args.axis)
+    if args.json:
+        print(json.dumps(res.to_dict(), indent=1))
+    else:
+        print(res.table())
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="thermerr", description="Machine-tool thermal error models and diagnosis.")
     p.add_argument("--version", action="version", version=f"thermerr_rs {__version__}")
@@ -254,6 +268,15 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--axis", default=None, help="error axis (default: the machine's first)")
     common(dg)
     dg.set_defaults(func=cmd_diagnose)
+
+    st = sub.add_parser("stiffness", help="key thermal stiffness: which sensor's element governs the axis (seed 001)")
+    st.add_argument("model", help="model JSON written by 'thermerr fit'")
+    st.add_argument("run", help="measured run CSV")
+    st.add_argument("--at", type=float, default=None, help="time in s of the sample to use (default: thermal equilibrium)")
+    st.add_argument("--eta", type=float, default=0.5, help="temperature step in °C (default 0.5)")
+    st.add_argument("--axis", default=None, help="error column (default: the model's target)")
+    common(st)
+    st.set_defaults(func=cmd_stiffness)
     return p
 
 
