@@ -3,7 +3,6 @@
 //! Every family follows the same shape (after linfa): `XParams` (a consuming builder with
 //! defaults) → `check()` → `XValidParams` → `fit(samples)` → a fitted model that is plain,
 //! serialisable data with a `predict` that checks its input.
-
 //!
 //! With the default feature `fit` off, only the fitted models' prediction code is built (no faer,
 //! no rayon): `thermerr-edge` uses exactly that, so the edge and the library share one `predict`
@@ -26,7 +25,11 @@ pub mod run;
 pub mod samples;
 pub mod svr;
 #[cfg(feature = "fit")]
+pub mod swarm;
+#[cfg(feature = "fit")]
 pub mod thermal;
+#[cfg(feature = "fit")]
+pub mod tune;
 
 pub use error::{Error, Result};
 pub use samples::{Matrix, Samples};

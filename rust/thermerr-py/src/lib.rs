@@ -7,6 +7,7 @@ mod linear;
 mod rbf;
 mod run;
 mod svr;
+mod swarm;
 mod thermal;
 
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -53,6 +54,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     rbf::register(m)?;
     thermal::register(m)?;
     svr::register(m)?;
+    swarm::register(m)?;
     Ok(())
 }
 
