@@ -447,17 +447,15 @@ fn par_chunk(a: usize) -> usize {
 }
 
 /// argmax over I_up of −y_t G_t in a slice starting at variable `off` (last index on ties).
+/// `up[t]`: t ∈ I_up, i.e. y_t = +1 and α_t < C, or y_t = −1 and α_t > 0.
 #[cfg(feature = "fit")]
-fn scan_i(g: &[f64], y: &[f32], st: &[Status], off: usize) -> (f64, usize) {
+fn scan_i(g: &[f64], y: &[f64], up: &[bool], off: usize) -> (f64, usize) {
     let (mut gmax, mut idx) = (f64::NEG_INFINITY, usize::MAX);
-    for (t, ((&g, &y), &st)) in g.iter().zip(y).zip(st).enumerate() {
-        if y == 1.0 {
-            if st != Status::Upper && -g >= gmax {
-                gmax = -g;
-                idx = off + t;
-            }
-        } else if st != Status::Lower && g >= gmax {
-            gmax = g;
+    for (t, ((&g, &y), &up)) in g.iter().zip(y).zip(up).enumerate() {
+        // −y·G with y = ±1 is exactly LIBSVM's −G or G
+        let v = -y * g;
+        if up && v >= gmax {
+            gmax = v;
             idx = off + t;
         }
     }
@@ -477,8 +475,9 @@ fn join_i(l: (f64, usize), r: (f64, usize)) -> (f64, usize) {
 #[cfg(feature = "fit")]
 struct Pass2<'s> {
     g: &'s [f64],
-    y: &'s [f32],
-    st: &'s [Status],
+    y: &'s [f64],
+    /// j ∈ I_low: y_j = +1 and α_j > 0, or y_j = −1 and α_j < C
+    low: &'s [bool],
     qd: &'s [f64],
     /// Q_ij for every active j (contiguous, as LIBSVM's column buffer).
     qi: &'s [f32],
@@ -520,39 +519,30 @@ impl Pass2<'_> {
     fn run(&self, lo: usize, hi: usize) -> Pass2Out {
         let mut out = Pass2Out::none();
         let (gmax, yi, qdi) = (self.gmax, self.yi, self.qdi);
-        for j in lo..hi {
-            let gj = self.g[j];
-            let grad_diff;
-            let quad_sign;
-            if self.y[j] == 1.0 {
-                if self.st[j] == Status::Lower {
-                    continue;
-                }
-                grad_diff = gmax + gj;
-                if gj >= out.gmax2 {
-                    out.gmax2 = gj;
-                }
-                quad_sign = -2.0;
-            } else {
-                if self.st[j] == Status::Upper {
-                    continue;
-                }
-                grad_diff = gmax - gj;
-                if -gj >= out.gmax2 {
-                    out.gmax2 = -gj;
-                }
-                quad_sign = 2.0;
+        let (g, y, low) = (&self.g[lo..hi], &self.y[lo..hi], &self.low[lo..hi]);
+        let (qd, qi) = (&self.qd[lo..hi], &self.qi[lo..hi]);
+        for (t, ((((&gj, &yj), &ok), &qdj), &qij)) in
+            g.iter().zip(y).zip(low).zip(qd).zip(qi).enumerate()
+        {
+            if !ok {
+                continue;
+            }
+            // y_j·G_j is LIBSVM's G_j (y = +1) or −G_j (y = −1), exactly
+            let v = yj * gj;
+            let grad_diff = gmax + v;
+            if v >= out.gmax2 {
+                out.gmax2 = v;
             }
             if grad_diff > 0.0 {
-                let qij = self.qi[j] as f64;
-                let quad = qdi + self.qd[j] + quad_sign * yi * qij;
+                // −2·y_i·y_j ∈ {±2}: the same rounding as LIBSVM's QD_i + QD_j ∓ 2·y_i·Q_ij
+                let quad = qdi + qdj + (-2.0 * yi * yj) * qij as f64;
                 let obj_diff = if quad > 0.0 {
                     -(grad_diff * grad_diff) / quad
                 } else {
                     -(grad_diff * grad_diff) / TAU
                 };
                 if obj_diff <= out.obj_min {
-                    out.idx = j;
+                    out.idx = lo + t;
                     out.obj_min = obj_diff;
                 }
             }
@@ -568,6 +558,10 @@ struct Solver<'q, 'a> {
     l: usize,
     active_size: usize,
     y: Vec<f32>,
+    /// y as f64, and membership of I_up / I_low, kept in step with `status`
+    yf: Vec<f64>,
+    up: Vec<bool>,
+    low: Vec<bool>,
     g: Vec<f64>,
     status: Vec<Status>,
     alpha: Vec<f64>,
@@ -597,6 +591,10 @@ fn solve(
         l,
         active_size: l,
         y: q.sign.clone(),
+        yf: q.sign.iter().map(|&s| s as f64).collect(),
+        // α = 0 everywhere: I_up holds the y = +1 variables, I_low the y = −1 ones
+        up: q.sign.iter().map(|&s| s > 0.0).collect(),
+        low: q.sign.iter().map(|&s| s < 0.0).collect(),
         g: p.clone(),
         status: vec![Status::Lower; l],
         alpha: vec![0.0; l],
@@ -668,18 +666,33 @@ impl Solver<'_, '_> {
         self.status[i] == Status::Free
     }
     fn update_status(&mut self, i: usize) {
-        self.status[i] = if self.alpha[i] >= self.c {
+        let st = if self.alpha[i] >= self.c {
             Status::Upper
         } else if self.alpha[i] <= 0.0 {
             Status::Lower
         } else {
             Status::Free
         };
+        self.status[i] = st;
+        let pos = self.y[i] > 0.0;
+        self.up[i] = if pos {
+            st != Status::Upper
+        } else {
+            st != Status::Lower
+        };
+        self.low[i] = if pos {
+            st != Status::Lower
+        } else {
+            st != Status::Upper
+        };
     }
 
     fn swap_index(&mut self, i: usize, j: usize) {
         self.q.swap_index(i, j);
         self.y.swap(i, j);
+        self.yf.swap(i, j);
+        self.up.swap(i, j);
+        self.low.swap(i, j);
         self.g.swap(i, j);
         self.status.swap(i, j);
         self.alpha.swap(i, j);
@@ -736,7 +749,7 @@ impl Solver<'_, '_> {
     /// index on ties, as LIBSVM's `>=`). `None` in the index when I_up is empty.
     fn select_i(&self) -> (f64, usize) {
         let a = self.active_size;
-        scan_i(&self.g[..a], &self.y[..a], &self.status[..a], 0)
+        scan_i(&self.g[..a], &self.yf[..a], &self.up[..a], 0)
     }
 
     /// Second-order working-set selection (Fan, Chen & Lin 2005) given the first index
@@ -750,8 +763,8 @@ impl Solver<'_, '_> {
             self.qi_of = Some((i, a));
             let ctx = Pass2 {
                 g: &self.g[..a],
-                y: &self.y[..a],
-                st: &self.status[..a],
+                y: &self.yf[..a],
+                low: &self.low[..a],
                 qd: &self.q.qd[..a],
                 qi: &self.qi[..a],
                 yi: self.y[i] as f64,
@@ -857,14 +870,14 @@ impl Solver<'_, '_> {
         self.update_status(j);
         let next = {
             let (qi, qj) = (&self.qi[..a], &self.qj[..a]);
-            let (y, st) = (&self.y[..a], &self.status[..a]);
+            let (y, up) = (&self.yf[..a], &self.up[..a]);
             let step = |g: &mut [f64], off: usize| {
                 let n = g.len();
                 let sl = off..off + n;
                 for ((g, a), b) in g.iter_mut().zip(&qi[sl.clone()]).zip(&qj[sl.clone()]) {
                     *g += *a as f64 * dai + *b as f64 * daj;
                 }
-                scan_i(g, &y[sl.clone()], &st[sl], off)
+                scan_i(g, &y[sl.clone()], &up[sl], off)
             };
             if a >= PAR_MIN {
                 use rayon::prelude::*;
