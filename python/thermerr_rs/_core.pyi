@@ -165,7 +165,7 @@ class SvrModel:
         c: float = 1.0,
         epsilon: float = 0.1,
         kernel: str = "rbf",
-        gamma: str | float = "scale",
+        gamma: str | float = ...,  # "scale"
         tol: float = 1e-3,
         shrinking: bool = True,
         cache_size: float = 200.0,
@@ -201,7 +201,7 @@ def swarm_minimize(
     g: int = 10,
     roosters: float = 0.2,
     hens: float = 0.6,
-    fl: tuple[float, float] = (0.4, 1.0),
+    fl: tuple[float, float] = ...,  # (0.4, 1.0)
     w: float = 0.7298,
     c1: float = 1.49618,
     c2: float = 1.49618,
@@ -219,8 +219,8 @@ def tune_svr(
     folds: list[list[int]],
     *,
     method: str = "cso",
-    c_bounds: tuple[float, float] = (0.01, 1000.0),
-    gamma_bounds: tuple[float, float] = (1e-4, 10.0),
+    c_bounds: tuple[float, float] = ...,  # (0.01, 1000.0)
+    gamma_bounds: tuple[float, float] = ...,  # (1e-4, 10.0)
     scale: str = "log",
     epsilon: float = 0.1,
     tol: float = 1e-3,
@@ -229,7 +229,7 @@ def tune_svr(
     g: int = 10,
     roosters: float = 0.2,
     hens: float = 0.6,
-    fl: tuple[float, float] = (0.4, 1.0),
+    fl: tuple[float, float] = ...,  # (0.4, 1.0)
     w: float = 0.7298,
     c1: float = 1.49618,
     c2: float = 1.49618,

@@ -163,8 +163,8 @@ def tune_svr(
 
     try:
         c, g, mse, hist, n, inner = _core.tune_svr(
-            x, yv, folds, method=method, c_bounds=tuple(map(float, b["C"])),
-            gamma_bounds=tuple(map(float, b["gamma"])), scale=scale, epsilon=float(epsilon),
+            x, yv, folds, method=method, c_bounds=(float(b["C"][0]), float(b["C"][1])),
+            gamma_bounds=(float(b["gamma"][0]), float(b["gamma"][1])), scale=scale, epsilon=float(epsilon),
             tol=float(tol), pop=int(pop), iters=int(iters), seed=int(seed), progress=cb, **extra,
         )
     finally:
