@@ -56,3 +56,21 @@ def test_usage_errors(argv):
     with pytest.raises(SystemExit) as info:
         main(argv)
     assert info.value.code == 2
+
+
+def test_fit_svr_tuned_by_cso(tmp_path, capsys):
+    from conftest import EXAMPLES
+
+    out = tmp_path / "svr.json"
+    sensors = "T_front_bearing,T_headstock,T_column,T_bed"
+    argv = ["fit", str(EXAMPLES / "spindle_3000rpm.csv"), "--axis", "E_z", "--model", "svr", "--tune", "cso",
+            "--pop", "8", "--iters", "10", "--sensors", sensors, "--out", str(out), "--json"]
+    assert main(argv) == 0
+    report = json.loads(capsys.readouterr().out)
+    model = tr.load_model(out)
+    assert isinstance(model, tr.SVR) and model.kind == "svr"
+    # the tuned parameters are the search's, and the same seed gives the same model
+    assert main(argv[:-3] + ["--out", str(tmp_path / "again.json"), "--json"]) == 0
+    capsys.readouterr()
+    assert tr.load_model(tmp_path / "again.json").get_params() == model.get_params()
+    assert report["train"]["rms"] < 1.0

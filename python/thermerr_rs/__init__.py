@@ -26,6 +26,9 @@ from .preprocessing import AGORegressor, MinMaxAGO, spread_search
 from .rbf import RBFNetwork
 from .run import Run, read_run
 from .selection import SensorSelection, select_sensors
+from .stiffness import StiffnessResult, key_thermal_stiffness
+from .svr import SVR
+from .swarm import SwarmResult, TuneResult, cso, pso, svr_cv_mse, tune_svr
 from .thermal import Diagnosis, Machine, Simulation, diagnose
 
 __all__ = [
@@ -45,6 +48,15 @@ __all__ = [
     "MinMaxAGO",
     "AGORegressor",
     "spread_search",
+    "SVR",
+    "cso",
+    "pso",
+    "SwarmResult",
+    "tune_svr",
+    "TuneResult",
+    "svr_cv_mse",
+    "key_thermal_stiffness",
+    "StiffnessResult",
     "Machine",
     "Simulation",
     "Diagnosis",

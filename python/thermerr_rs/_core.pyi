@@ -153,3 +153,87 @@ class MachineModel:
         min_score: float = 0.1,
         noise_ratio: float = 2.0,
     ) -> dict[str, Any]: ...
+
+# --- support vector regression -------------------------------------------------------------------
+@final
+class SvrModel:
+    @staticmethod
+    def fit(
+        x: _F64,
+        y: _F64,
+        *,
+        c: float = 1.0,
+        epsilon: float = 0.1,
+        kernel: str = "rbf",
+        gamma: str | float = ...,  # "scale"
+        tol: float = 1e-3,
+        shrinking: bool = True,
+        cache_size: float = 200.0,
+        max_iter: int | None = None,
+    ) -> SvrModel: ...
+    def predict(self, x: _F64) -> _F64: ...
+    @property
+    def support_vectors(self) -> _F64: ...
+    @property
+    def dual_coef(self) -> _F64: ...
+    @property
+    def support(self) -> list[int]: ...
+    @property
+    def intercept(self) -> float: ...
+    @property
+    def n_iter(self) -> int: ...
+    @property
+    def gamma(self) -> float | None: ...
+    @property
+    def n_features(self) -> int: ...
+    def to_json(self) -> str: ...
+    @staticmethod
+    def from_json(text: str) -> SvrModel: ...
+
+# --- swarm search and SVR tuning ----------------------------------------------------------------
+def swarm_minimize(
+    f: Any,
+    bounds: list[tuple[float, float]],
+    *,
+    method: str = "cso",
+    pop: int = 20,
+    iters: int = 100,
+    g: int = 10,
+    roosters: float = 0.2,
+    hens: float = 0.6,
+    fl: tuple[float, float] = ...,  # (0.4, 1.0)
+    w: float = 0.7298,
+    c1: float = 1.49618,
+    c2: float = 1.49618,
+    vmax_frac: float = 0.2,
+    seed: int = 0,
+    vectorized: bool = False,
+) -> tuple[list[float], float, list[float], int]: ...
+def kfold(n: int, k: int, seed: int | None = None) -> list[list[int]]: ...
+def svr_cv_mse(
+    x: _F64, y: _F64, folds: list[list[int]], *, c: float, gamma: float, epsilon: float = 0.1, tol: float = 1e-3
+) -> float: ...
+def tune_svr(
+    x: _F64,
+    y: _F64,
+    folds: list[list[int]],
+    *,
+    method: str = "cso",
+    c_bounds: tuple[float, float] = ...,  # (0.01, 1000.0)
+    gamma_bounds: tuple[float, float] = ...,  # (1e-4, 10.0)
+    scale: str = "log",
+    epsilon: float = 0.1,
+    tol: float = 1e-3,
+    pop: int = 20,
+    iters: int = 100,
+    g: int = 10,
+    roosters: float = 0.2,
+    hens: float = 0.6,
+    fl: tuple[float, float] = ...,  # (0.4, 1.0)
+    w: float = 0.7298,
+    c1: float = 1.49618,
+    c2: float = 1.49618,
+    vmax_frac: float = 0.2,
+    seed: int = 0,
+    progress: Any = None,
+) -> tuple[float, float, float, list[float], int, SvrModel]: ...

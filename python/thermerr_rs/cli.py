@@ -1,11 +1,12 @@
 """The ``thermerr`` command line: one entry point, one subcommand per job.
 
-    thermerr fit RUN.csv --axis E_z --model mlr|rbf [--sensors auto|T_a,T_b] --out MODEL.json
+    thermerr fit RUN.csv --axis E_z --model mlr|rbf|svr [--tune cso|pso] [--sensors auto|T_a,T_b] --out MODEL.json
     thermerr evaluate MODEL.json RUN.csv
     thermerr select-sensors RUN.csv --axis E_z
     thermerr predict RUN.csv --machine M.toml --out PRED.csv
     thermerr calibrate RUN.csv --machine M.toml --out CAL.toml
     thermerr diagnose RUN.csv --machine M.toml --out DIR [--holdout TEST.csv]
+    thermerr stiffness MODEL.json RUN.csv [--at SECONDS] [--eta 0.5]
 
 Bad input ends with a one-line message on stderr and exit status 2.
 """
@@ -56,6 +57,22 @@ def _sensors(args: argparse.Namespace, run: Run) -> list[str]:
     return names
 
 
+def _make_svr(args: argparse.Namespace, run: Run, sensors: list[str]) -> Estimator:
+    from .base import _run_inputs
+    from .svr import SVR
+
+    if not args.tune:
+        return SVR(C=args.C, epsilon=args.epsilon, gamma=args.gamma if args.gamma is not None else "scale")
+    from .swarm import tune_svr
+
+    res = tune_svr(_run_inputs(run, sensors, args.inputs), run[args.axis], method=args.tune, cv=args.cv,
+                   epsilon=args.epsilon, pop=args.pop, iters=args.iters, seed=args.seed,
+                   progress=_progress_enabled(args))
+    _say(args, f"{args.tune.upper()} search: C = {res.C:.5g}, gamma = {res.gamma:.5g}, "
+               f"{args.cv}-fold CV MSE {res.cv_mse:.4g} µm² ({res.n_evals} evaluations)")
+    return SVR(C=res.C, epsilon=args.epsilon, gamma=res.gamma)
+
+
 def _make_model(args: argparse.Namespace, n_train: int) -> Estimator:
     if args.model == "mlr":
         return MLR()
@@ -83,7 +100,10 @@ def cmd_fit(args: argparse.Namespace) -> int:
     run = read_run(args.run, nan=args.nan)
     run[args.axis]
     sensors = _sensors(args, run)
-    model = _make_model(args, len(run))
+    if args.model == "svr":
+        model = _make_svr(args, run, sensors)
+    else:
+        model = _make_model(args, len(run))
     model.fit_run(run, args.axis, sensors, inputs=args.inputs)
     _say(args, f"fitted {args.model} on {len(run)} samples of {run.source}: {args.axis} from {', '.join(sensors)}")
     report: dict[str, Any] = {"model": args.model, "axis": args.axis, "sensors": sensors}
@@ -183,6 +203,19 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_stiffness(args: argparse.Namespace) -> int:
+    from .stiffness import key_thermal_stiffness
+
+    model = load_model(args.model)
+    run = read_run(args.run, nan=args.nan)
+    res = key_thermal_stiffness(model, run, at=args.at, eta=args.eta, target=args.axis)
+    if args.json:
+        print(json.dumps(res.to_dict(), indent=1))
+    else:
+        print(res.table())
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="thermerr", description="Machine-tool thermal error models and diagnosis.")
     p.add_argument("--version", action="version", version=f"thermerr_rs {__version__}")
@@ -197,7 +230,7 @@ def build_parser() -> argparse.ArgumentParser:
     f = sub.add_parser("fit", help="fit a thermal error model to a run and save it")
     f.add_argument("run", help="measured run CSV")
     f.add_argument("--axis", required=True, help="error column to model, e.g. E_z")
-    f.add_argument("--model", choices=["mlr", "rbf"], default="mlr")
+    f.add_argument("--model", choices=["mlr", "rbf", "svr"], default="mlr")
     f.add_argument("--sensors", default="all", help="'all' (default), 'auto' (fuzzy c-means selection) or T_a,T_b,...")
     f.add_argument("--n-clusters", type=int, default=4, help="clusters for --sensors auto (default 4)")
     f.add_argument("--seed", type=int, default=0, help="seed of every stochastic step (default 0)")
@@ -207,6 +240,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="RBF sum-squared error goal in µm² (default: 0.1 µm² per training sample)")
     f.add_argument("--max-neurons", type=int, default=None)
     f.add_argument("--n-centers", type=int, default=None, help="centres of the kmeans design")
+    f.add_argument("--C", type=float, default=1.0, help="SVR box constraint (default 1; searched with --tune)")
+    f.add_argument("--epsilon", type=float, default=0.1, help="SVR tube half-width in µm (default 0.1)")
+    f.add_argument("--gamma", type=float, default=None, help="SVR RBF gamma (default: 'scale'; searched with --tune)")
+    f.add_argument("--tune", choices=["cso", "pso"], default=None,
+                   help="search SVR C and gamma by k-fold CV MSE with chicken swarm or particle swarm (seed 004)")
+    f.add_argument("--cv", type=int, default=5, help="folds of the --tune search (default 5)")
+    f.add_argument("--pop", type=int, default=20, help="swarm population of --tune (default 20)")
+    f.add_argument("--iters", type=int, default=100, help="swarm generations of --tune (default 100)")
     f.add_argument("--inputs", choices=["rise", "absolute"], default="rise",
                    help="model from each sensor's rise since the run's start (default) or absolute readings")
     f.add_argument("--test", help="a held-out run to score the model on")
@@ -254,6 +295,15 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--axis", default=None, help="error axis (default: the machine's first)")
     common(dg)
     dg.set_defaults(func=cmd_diagnose)
+
+    st = sub.add_parser("stiffness", help="key thermal stiffness: which sensor's element governs the axis (seed 001)")
+    st.add_argument("model", help="model JSON written by 'thermerr fit'")
+    st.add_argument("run", help="measured run CSV")
+    st.add_argument("--at", type=float, default=None, help="time in s of the sample to use (default: thermal equilibrium)")
+    st.add_argument("--eta", type=float, default=0.5, help="temperature step in °C (default 0.5)")
+    st.add_argument("--axis", default=None, help="error column (default: the model's target)")
+    common(st)
+    st.set_defaults(func=cmd_stiffness)
     return p
 
 

@@ -3,19 +3,33 @@
 //! Every family follows the same shape (after linfa): `XParams` (a consuming builder with
 //! defaults) → `check()` → `XValidParams` → `fit(samples)` → a fitted model that is plain,
 //! serialisable data with a `predict` that checks its input.
+//!
+//! With the default feature `fit` off, only the fitted models' prediction code is built (no faer,
+//! no rayon): `thermerr-edge` uses exactly that, so the edge and the library share one `predict`
+//! per model kind.
 
 pub mod error;
+#[cfg(feature = "fit")]
 pub mod fcm;
+#[cfg(feature = "fit")]
 pub mod kmeans;
+#[cfg(feature = "fit")]
 pub mod linalg;
 pub mod linear;
 pub mod metrics;
+#[cfg(feature = "fit")]
 pub mod optim;
 pub mod rbf;
+#[cfg(feature = "fit")]
 pub mod run;
 pub mod samples;
+pub mod svr;
+#[cfg(feature = "fit")]
 pub mod swarm;
+#[cfg(feature = "fit")]
 pub mod thermal;
+#[cfg(feature = "fit")]
+pub mod tune;
 
 pub use error::{Error, Result};
 pub use samples::{Matrix, Samples};

@@ -3,8 +3,11 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+#[cfg(feature = "fit")]
 use crate::linalg::lstsq;
-use crate::samples::{check_target, Samples};
+#[cfg(feature = "fit")]
+use crate::samples::check_target;
+use crate::samples::Samples;
 
 /// Hyper-parameters of [`LinearRegression`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -27,6 +30,7 @@ pub struct LinearRegression {
     pub intercept: f64,
 }
 
+#[cfg(feature = "fit")]
 impl MlrParams {
     /// Fits by least squares on centred data, as scikit-learn's `LinearRegression` does (centring
     /// keeps the intercept out of the conditioning of the design matrix).
@@ -82,7 +86,7 @@ pub fn check_features(got: usize, want: usize) -> Result<()> {
     Ok(())
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "fit"))]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;

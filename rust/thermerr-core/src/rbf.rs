@@ -10,11 +10,18 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
+#[cfg(feature = "fit")]
+use crate::error::Error;
+use crate::error::Result;
+#[cfg(feature = "fit")]
 use crate::kmeans::{kmeans, kmeans_plus_plus};
+#[cfg(feature = "fit")]
 use crate::linalg::{lstsq, solve};
 use crate::linear::check_features;
-use crate::samples::{check_target, sq_dist, Matrix, Samples};
+#[cfg(feature = "fit")]
+use crate::samples::check_target;
+use crate::samples::{sq_dist, Matrix, Samples};
+#[cfg(feature = "fit")]
 use rayon::prelude::*;
 
 /// √(−ln 0.5): MATLAB's radbas width constant (0.8326).
@@ -78,6 +85,7 @@ pub struct RbfNetwork {
     pub sse_history: Vec<f64>,
 }
 
+#[cfg(feature = "fit")]
 fn design_matrix(x: Samples<'_>, centers: &Matrix, b: f64) -> faer::Mat<f64> {
     let k = centers.nrows();
     let rows: Vec<Vec<f64>> = (0..x.nrows())
@@ -95,6 +103,7 @@ fn design_matrix(x: Samples<'_>, centers: &Matrix, b: f64) -> faer::Mat<f64> {
     )
 }
 
+#[cfg(feature = "fit")]
 fn rows_of(x: Samples<'_>, idx: &[usize]) -> Matrix {
     let mut data = Vec::with_capacity(idx.len() * x.ncols());
     for &i in idx {
@@ -106,6 +115,7 @@ fn rows_of(x: Samples<'_>, idx: &[usize]) -> Matrix {
     }
 }
 
+#[cfg(feature = "fit")]
 impl RbfParams {
     fn check(&self, n: usize) -> Result<()> {
         if !(self.spread.is_finite() && self.spread > 0.0) {
@@ -293,9 +303,13 @@ impl RbfNetwork {
     pub fn predict(&self, x: Samples<'_>) -> Result<Vec<f64>> {
         check_features(x.ncols(), self.n_features())?;
         x.require_finite("X")?;
+        #[cfg(not(feature = "fit"))]
+        return Ok(x.rows().map(|r| self.predict_one(r)).collect());
+        #[cfg(feature = "fit")]
         if x.nrows() * self.weights.len() * x.ncols() < 1 << 16 {
             return Ok(x.rows().map(|r| self.predict_one(r)).collect());
         }
+        #[cfg(feature = "fit")]
         Ok((0..x.nrows())
             .into_par_iter()
             .map(|i| self.predict_one(x.row(i)))
@@ -303,7 +317,7 @@ impl RbfNetwork {
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, feature = "fit"))]
 mod tests {
     use super::*;
     use approx::assert_relative_eq;

@@ -64,6 +64,7 @@ impl<'a> Samples<'a> {
     }
 
     /// A faer view of the same memory.
+    #[cfg(feature = "fit")]
     pub fn as_faer(&self) -> faer::MatRef<'a, f64> {
         faer::MatRef::from_row_major_slice(self.data, self.n, self.d)
     }
@@ -160,6 +161,7 @@ impl Matrix {
         &self.data[i * d..(i + 1) * d]
     }
 
+    #[cfg(feature = "fit")]
     pub fn from_faer(m: faer::MatRef<'_, f64>) -> Self {
         let (r, c) = (m.nrows(), m.ncols());
         let mut data = Vec::with_capacity(r * c);

@@ -6,6 +6,8 @@ mod fcm;
 mod linear;
 mod rbf;
 mod run;
+mod svr;
+mod swarm;
 mod thermal;
 
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
@@ -51,6 +53,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     fcm::register(m)?;
     rbf::register(m)?;
     thermal::register(m)?;
+    svr::register(m)?;
+    swarm::register(m)?;
     Ok(())
 }
 

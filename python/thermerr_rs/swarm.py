@@ -1,0 +1,186 @@
+"""Box-bounded swarm minimisers in Rust — chicken swarm optimisation (Meng et al. 2014) and
+particle swarm — and seed 004's tuning of an ε-SVR by cross-validated error."""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from . import _core
+from ._arrays import F64, as_matrix, as_vector
+from .errors import ParameterError
+from .svr import SVR
+
+Objective = str | Callable[[F64], float] | Callable[[F64], Sequence[float]]
+
+
+@dataclass(frozen=True)
+class SwarmResult:
+    """Best point ``x`` and value ``fun`` found, the best value after each generation
+    (``history``, ``iters`` entries), and the number of objective evaluations (the initial
+    population included)."""
+
+    x: F64
+    fun: float
+    history: F64
+    n_evals: int
+
+
+def _bounds(bounds: Any) -> list[tuple[float, float]]:
+    try:
+        out = [(float(lo), float(hi)) for lo, hi in bounds]
+    except (TypeError, ValueError):
+        raise ParameterError("bounds must be a sequence of (low, high) pairs") from None
+    return out
+
+
+def _run(f: Objective, bounds: Any, vectorized: bool, **kw: Any) -> SwarmResult:
+    x, fun, hist, n = _core.swarm_minimize(f, _bounds(bounds), vectorized=vectorized, **kw)
+    return SwarmResult(np.asarray(x), float(fun), np.asarray(hist), int(n))
+
+
+def cso(
+    f: Objective,
+    bounds: Sequence[tuple[float, float]],
+    *,
+    pop: int = 20,
+    iters: int = 100,
+    G: int = 10,
+    roosters: float = 0.2,
+    hens: float = 0.6,
+    fl: tuple[float, float] = (0.4, 1.0),
+    seed: int = 0,
+    vectorized: bool = False,
+) -> SwarmResult:
+    """Chicken swarm optimisation (Meng et al. 2014) of ``f`` over the box ``bounds``.
+
+    ``f`` is a callable taking a point (1-D array) and returning a float — or, with
+    ``vectorized=True``, taking the population (pop × dim) and returning pop floats — or the name of
+    a built-in objective (``"sphere"``, ``"rosenbrock"``, ``"rastrigin"``), evaluated natively in
+    parallel. Every G generations the swarm is ranked: the best ``roosters``·pop are roosters, the
+    worst (1 − roosters − hens)·pop chicks, the rest hens; moves follow methods.md §6 with each
+    chicken's personal best as memory. Non-finite values count as +∞. The same seed gives the
+    same result.
+    """
+    return _run(f, bounds, vectorized, method="cso", pop=int(pop), iters=int(iters), g=int(G),
+                roosters=float(roosters), hens=float(hens), fl=(float(fl[0]), float(fl[1])), seed=int(seed))
+
+
+def pso(
+    f: Objective,
+    bounds: Sequence[tuple[float, float]],
+    *,
+    pop: int = 20,
+    iters: int = 100,
+    w: float = 0.7298,
+    c1: float = 1.49618,
+    c2: float = 1.49618,
+    vmax_frac: float = 0.2,
+    seed: int = 0,
+    vectorized: bool = False,
+) -> SwarmResult:
+    """Global-best particle swarm (inertia ``w``, cognitive ``c1``, social ``c2``; velocities
+    clamped to ``vmax_frac`` of each range) of ``f`` over ``bounds``; ``f`` as in :func:`cso`."""
+    return _run(f, bounds, vectorized, method="pso", pop=int(pop), iters=int(iters), w=float(w),
+                c1=float(c1), c2=float(c2), vmax_frac=float(vmax_frac), seed=int(seed))
+
+
+@dataclass
+class TuneResult:
+    """Outcome of :func:`tune_svr`: the best ``C`` and ``gamma``, their cross-validated MSE, the
+    best CV MSE after each generation, the evaluations spent, the SVR refitted on all the data,
+    and the folds used."""
+
+    C: float
+    gamma: float
+    cv_mse: float
+    history: F64
+    n_evals: int
+    model: SVR
+    folds: list[list[int]] = field(repr=False)
+
+
+def tune_svr(
+    X: Any,
+    y: Any,
+    *,
+    method: str = "cso",
+    cv: int | Sequence[Sequence[int]] = 5,
+    bounds: dict[str, tuple[float, float]] | None = None,
+    scale: str = "log",
+    epsilon: float = 0.1,
+    tol: float = 1e-3,
+    pop: int = 20,
+    iters: int = 100,
+    seed: int = 0,
+    progress: bool | None = None,
+    **swarm: Any,
+) -> TuneResult:
+    """Seed 004: search (C, γ) of an RBF ε-SVR minimising the k-fold cross-validated MSE.
+
+    ``method`` ``"cso"`` or ``"pso"``; ``cv`` a number of folds (shuffled by ``seed``) or explicit
+    test-index folds; ``bounds`` ``{"C": (lo, hi), "gamma": (lo, hi)}`` (default C in
+    [0.01, 1000], γ in [1e-4, 10]); ``scale="log"`` searches log10 of both, ``"linear"`` the values
+    as they are (the seed's). All population × fold SVR fits of a generation run natively in
+    parallel without the GIL. A progress bar shows on a terminal unless ``progress=False``. Extra
+    keywords go to the swarm (``G``, ``roosters``, ``hens``, ``fl``, ``w``, ``c1``, ``c2``,
+    ``vmax_frac``).
+    """
+    x = as_matrix(X)
+    yv = as_vector(y, n=x.shape[0])
+    b = {"C": (0.01, 1000.0), "gamma": (1e-4, 10.0)}
+    if bounds:
+        unknown = set(bounds) - set(b)
+        if unknown:
+            raise ParameterError(f"bounds has unknown keys {sorted(unknown)} (known: C, gamma)")
+        b.update(bounds)
+    if isinstance(cv, int):
+        folds = _core.kfold(x.shape[0], cv, seed)
+    else:
+        folds = [[int(i) for i in f] for f in cv]
+    known = {"G": "g", "roosters": "roosters", "hens": "hens", "fl": "fl", "w": "w", "c1": "c1",
+             "c2": "c2", "vmax_frac": "vmax_frac"}
+    extra = {}
+    for k, v in swarm.items():
+        if k not in known:
+            raise ParameterError(f"tune_svr got an unknown keyword {k!r}")
+        extra[known[k]] = v
+    show = sys.stderr.isatty() if progress is None else progress
+    bar: Any = None
+    cb = None
+    if show:
+        from tqdm import tqdm
+
+        bar = tqdm(total=iters + 1, desc=f"{method.upper()}-SVR", unit="gen")
+
+        def cb(gen: int, best: float) -> None:
+            bar.set_postfix(cv_mse=f"{best:.4g}", refresh=False)
+            bar.update(1)
+
+    try:
+        c, g, mse, hist, n, inner = _core.tune_svr(
+            x, yv, folds, method=method, c_bounds=(float(b["C"][0]), float(b["C"][1])),
+            gamma_bounds=(float(b["gamma"][0]), float(b["gamma"][1])), scale=scale, epsilon=float(epsilon),
+            tol=float(tol), pop=int(pop), iters=int(iters), seed=int(seed), progress=cb, **extra,
+        )
+    finally:
+        if bar is not None:
+            bar.close()
+    model = SVR(C=c, epsilon=epsilon, gamma=g, tol=tol)
+    model._inner = inner
+    model.n_features_in_ = x.shape[1]
+    return TuneResult(float(c), float(g), float(mse), np.asarray(hist), int(n), model, folds)
+
+
+def svr_cv_mse(X: Any, y: Any, folds: Sequence[Sequence[int]], *, C: float, gamma: float,
+               epsilon: float = 0.1, tol: float = 1e-3) -> float:
+    """Mean over ``folds`` (test-index sets) of the held-out MSE of an RBF ε-SVR — the objective
+    :func:`tune_svr` minimises."""
+    x = as_matrix(X)
+    yv = as_vector(y, n=x.shape[0])
+    return float(_core.svr_cv_mse(x, yv, [[int(i) for i in f] for f in folds], c=float(C),
+                                  gamma=float(gamma), epsilon=float(epsilon), tol=float(tol)))

@@ -1,0 +1,1118 @@
+//! ε-support vector regression (seed 004), solved by SMO exactly as LIBSVM (and so scikit-learn's
+//! `SVR`) does: the 2l-variable dual of Chang & Lin, second-order working-set selection (Fan, Chen
+//! & Lin 2005), shrinking with gradient reconstruction, an LRU cache of single-precision kernel
+//! columns, and the same stopping rule (max violation < `tol`).
+//!
+//! The dual: minimise ½ (α − α*)ᵀ K (α − α*) + ε Σ (αᵢ + αᵢ*) − Σ yᵢ (αᵢ − αᵢ*) subject to
+//! Σ (αᵢ − αᵢ*) = 0 and 0 ≤ αᵢ, αᵢ* ≤ C. The prediction is f(x) = Σ_s β_s k(x, x_s) + b with
+//! β = α − α* over the support vectors (β ≠ 0) and b = −ρ.
+//!
+//! Kernel values in the solver follow LIBSVM's arithmetic to the bit: ‖xᵢ‖² + ‖xⱼ‖² − 2 xᵢ·xⱼ
+//! with sequential sums, `exp` in double, then rounded to `f32` for the cache (LIBSVM's `Qfloat`).
+
+use serde::{Deserialize, Serialize};
+
+#[cfg(feature = "fit")]
+use crate::error::Error;
+use crate::error::Result;
+use crate::linear::check_features;
+#[cfg(feature = "fit")]
+use crate::samples::check_target;
+use crate::samples::{Matrix, Samples};
+
+/// The kernel of a fitted SVR.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase")]
+pub enum Kernel {
+    /// k(x, x') = exp(−γ‖x − x'‖²)
+    Rbf { gamma: f64 },
+    /// k(x, x') = x·x'
+    Linear,
+}
+
+impl Kernel {
+    /// One kernel value as LIBSVM's `k_function` computes it at prediction time.
+    #[inline]
+    pub fn eval(&self, x: &[f64], sv: &[f64]) -> f64 {
+        match *self {
+            Kernel::Rbf { gamma } => {
+                let mut sum = 0.0;
+                for (a, b) in x.iter().zip(sv) {
+                    let d = a - b;
+                    sum += d * d;
+                }
+                (-gamma * sum).exp()
+            }
+            Kernel::Linear => dot(x, sv),
+        }
+    }
+}
+
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let mut s = 0.0;
+    for (x, y) in a.iter().zip(b) {
+        s += x * y;
+    }
+    s
+}
+
+/// A fitted ε-SVR: f(x) = Σ_s dual_coef_s · k(x, sv_s) + intercept.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SvrModel {
+    pub kernel: Kernel,
+    /// Support vectors, one per row, in training order.
+    pub support_vectors: Matrix,
+    /// αᵢ − αᵢ* of each support vector.
+    pub dual_coef: Vec<f64>,
+    pub intercept: f64,
+    /// Training indices of the support vectors.
+    #[serde(default)]
+    pub support: Vec<usize>,
+    /// SMO iterations the solver took.
+    #[serde(default)]
+    pub n_iter: usize,
+}
+
+impl SvrModel {
+    pub fn n_features(&self) -> usize {
+        self.support_vectors.ncols()
+    }
+
+    /// One sample, no allocation; the sum runs over the support vectors in order, as LIBSVM's.
+    #[inline]
+    pub fn predict_one(&self, x: &[f64]) -> f64 {
+        let mut sum = 0.0;
+        for (s, c) in self.dual_coef.iter().enumerate() {
+            sum += c * self.kernel.eval(x, self.support_vectors.row(s));
+        }
+        sum + self.intercept
+    }
+
+    pub fn predict(&self, x: Samples<'_>) -> Result<Vec<f64>> {
+        check_features(x.ncols(), self.n_features())?;
+        x.require_finite("X")?;
+        #[cfg(feature = "fit")]
+        if x.nrows() * self.dual_coef.len() * x.ncols() >= 1 << 16 {
+            use rayon::prelude::*;
+            return Ok((0..x.nrows())
+                .into_par_iter()
+                .map(|i| self.predict_one(x.row(i)))
+                .collect());
+        }
+        Ok(x.rows().map(|r| self.predict_one(r)).collect())
+    }
+}
+
+/// γ of the RBF kernel, with scikit-learn's names.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Gamma {
+    /// 1 / (n_features · Var(X)), the variance over all entries of X (1 if that is 0).
+    Scale,
+    /// 1 / n_features.
+    Auto,
+    Value(f64),
+}
+
+/// Which kernel to fit with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum KernelKind {
+    Rbf,
+    Linear,
+}
+
+/// Hyper-parameters of an ε-SVR, with scikit-learn's meaning and defaults.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SvrParams {
+    pub c: f64,
+    pub epsilon: f64,
+    pub kernel: KernelKind,
+    pub gamma: Gamma,
+    /// Stopping tolerance on the maximal violating pair (LIBSVM's `-e`).
+    pub tol: f64,
+    pub shrinking: bool,
+    /// Kernel cache in MiB.
+    pub cache_size: f64,
+    /// Iteration cap; `None` = no limit (scikit-learn's −1).
+    pub max_iter: Option<usize>,
+}
+
+impl Default for SvrParams {
+    fn default() -> Self {
+        SvrParams {
+            c: 1.0,
+            epsilon: 0.1,
+            kernel: KernelKind::Rbf,
+            gamma: Gamma::Scale,
+            tol: 1e-3,
+            shrinking: true,
+            cache_size: 200.0,
+            max_iter: None,
+        }
+    }
+}
+
+/// Resolves `gamma="scale"` on the training matrix as scikit-learn does.
+#[cfg(feature = "fit")]
+pub fn scale_gamma(x: Samples<'_>) -> f64 {
+    let data = x.as_slice();
+    let n = data.len() as f64;
+    let mean = data.iter().sum::<f64>() / n;
+    let var = data.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n;
+    if var != 0.0 {
+        1.0 / (x.ncols() as f64 * var)
+    } else {
+        1.0
+    }
+}
+
+#[cfg(feature = "fit")]
+impl SvrParams {
+    fn check(&self) -> Result<()> {
+        if !(self.c > 0.0 && self.c.is_finite()) {
+            return Err(Error::param("C", format!("must be > 0, got {}", self.c)));
+        }
+        if !(self.epsilon >= 0.0 && self.epsilon.is_finite()) {
+            return Err(Error::param(
+                "epsilon",
+                format!("must be >= 0, got {}", self.epsilon),
+            ));
+        }
+        if !(self.tol > 0.0 && self.tol.is_finite()) {
+            return Err(Error::param(
+                "tol",
+                format!("must be > 0, got {}", self.tol),
+            ));
+        }
+        if !(self.cache_size > 0.0 && self.cache_size.is_finite()) {
+            return Err(Error::param(
+                "cache_size",
+                format!("must be > 0 MiB, got {}", self.cache_size),
+            ));
+        }
+        if let Gamma::Value(g) = self.gamma {
+            if !(g > 0.0 && g.is_finite()) {
+                return Err(Error::param("gamma", format!("must be > 0, got {g}")));
+            }
+        }
+        Ok(())
+    }
+
+    /// The kernel these parameters give on `x` (γ resolved).
+    pub fn kernel_for(&self, x: Samples<'_>) -> Kernel {
+        match self.kernel {
+            KernelKind::Linear => Kernel::Linear,
+            KernelKind::Rbf => Kernel::Rbf {
+                gamma: match self.gamma {
+                    Gamma::Scale => scale_gamma(x),
+                    Gamma::Auto => 1.0 / x.ncols() as f64,
+                    Gamma::Value(g) => g,
+                },
+            },
+        }
+    }
+
+    pub fn fit(&self, x: Samples<'_>, y: &[f64]) -> Result<SvrModel> {
+        self.check()?;
+        x.require_finite("X")?;
+        check_target(y, x.nrows())?;
+        let kernel = self.kernel_for(x);
+        let mut q = SvrQ::new(x, kernel, self.cache_size);
+        let l = x.nrows();
+        let mut p = Vec::with_capacity(2 * l);
+        p.extend(y.iter().map(|v| self.epsilon - v));
+        p.extend(y.iter().map(|v| self.epsilon + v));
+        let sol = solve(&mut q, p, self.c, self.tol, self.shrinking, self.max_iter);
+        let mut support = Vec::new();
+        let mut dual_coef = Vec::new();
+        for i in 0..l {
+            let b = sol.alpha[i] - sol.alpha[i + l];
+            if b.abs() > 0.0 {
+                support.push(i);
+                dual_coef.push(b);
+            }
+        }
+        let mut sv = Vec::with_capacity(support.len() * x.ncols());
+        for &i in &support {
+            sv.extend_from_slice(x.row(i));
+        }
+        Ok(SvrModel {
+            kernel,
+            support_vectors: Matrix {
+                shape: [support.len(), x.ncols()],
+                data: sv,
+            },
+            dual_coef,
+            intercept: -sol.rho,
+            support,
+            n_iter: sol.n_iter,
+        })
+    }
+}
+
+/// The SVR's Q matrix over 2l variables (LIBSVM's `SVR_Q`): Q_ts = s_t s_u K(t mod l, u mod l),
+/// with the permutation that shrinking applies, over an LRU cache of kernel rows.
+#[cfg(feature = "fit")]
+struct SvrQ<'a> {
+    x: Samples<'a>,
+    kernel: Kernel,
+    xsq: Vec<f64>,
+    cache: Cache,
+    /// s_t = ±1 of each (permuted) variable, as f32 so that s_t s_u K is formed exactly as
+    /// LIBSVM's `Qfloat` products are.
+    sign: Vec<f32>,
+    index: Vec<usize>,
+    qd: Vec<f64>,
+}
+
+#[cfg(feature = "fit")]
+impl<'a> SvrQ<'a> {
+    fn new(x: Samples<'a>, kernel: Kernel, cache_mib: f64) -> Self {
+        let l = x.nrows();
+        let xsq: Vec<f64> = x.rows().map(|r| dot(r, r)).collect();
+        let mut q = SvrQ {
+            x,
+            kernel,
+            xsq,
+            cache: Cache::new(l, cache_mib),
+            sign: (0..2 * l).map(|t| if t < l { 1.0 } else { -1.0 }).collect(),
+            index: (0..2 * l).map(|t| t % l).collect(),
+            qd: Vec::new(),
+        };
+        let qd: Vec<f64> = (0..l).map(|i| q.k(i, i)).collect();
+        q.qd = qd.iter().chain(&qd).copied().collect();
+        q
+    }
+
+    /// LIBSVM's training-time kernel (`kernel_rbf` uses the precomputed squared norms).
+    #[inline]
+    fn k(&self, i: usize, j: usize) -> f64 {
+        let d = dot(self.x.row(i), self.x.row(j));
+        match self.kernel {
+            Kernel::Rbf { gamma } => (-gamma * (self.xsq[i] + self.xsq[j] - 2.0 * d)).exp(),
+            Kernel::Linear => d,
+        }
+    }
+
+    fn swap_index(&mut self, i: usize, j: usize) {
+        self.sign.swap(i, j);
+        self.index.swap(i, j);
+        self.qd.swap(i, j);
+    }
+
+    /// Makes sure the kernel row of variable `i` is cached (most recently used); returns the
+    /// data index of that row. Q_iu = s_i s_u K[row][index_u] for every variable u.
+    ///
+    /// LIBSVM copies each requested column into a buffer with the signs applied; reading the
+    /// cached row through `index` and `sign` instead gives the same f32 values without the copy.
+    fn col(&mut self, i: usize) -> usize {
+        let real = self.index[i];
+        if !self.cache.has(real) {
+            let l = self.x.nrows();
+            let mut row = self.cache.take_slot(l);
+            let this = &*self;
+            let fill = |(j, v): (usize, &mut f32)| *v = this.k(real, j) as f32;
+            if l * self.x.ncols() >= 4096 {
+                use rayon::prelude::*;
+                row.par_iter_mut().enumerate().for_each(fill);
+            } else {
+                row.iter_mut().enumerate().for_each(fill);
+            }
+            self.cache.put(real, row);
+        } else {
+            self.cache.touch(real);
+        }
+        real
+    }
+
+    /// Q_iu for the first `len` variables u into `out` (LIBSVM's `get_Q`).
+    fn column(&mut self, i: usize, len: usize, out: &mut [f32]) {
+        let real = self.col(i);
+        let (d, si) = (self.cache.row(real), self.sign[i]);
+        for ((o, s), &u) in out[..len].iter_mut().zip(&self.sign).zip(&self.index) {
+            *o = si * s * d[u];
+        }
+    }
+
+    fn data(&self, real: usize) -> &[f32] {
+        self.cache.row(real)
+    }
+}
+
+/// LRU cache of full kernel rows (f32), bounded in bytes like LIBSVM's (at least two rows).
+#[cfg(feature = "fit")]
+struct Cache {
+    rows: Vec<Option<Vec<f32>>>,
+    prev: Vec<usize>,
+    next: Vec<usize>,
+    /// Sentinel index of the circular LRU list (= number of rows).
+    head: usize,
+    free_rows: usize,
+}
+
+#[cfg(feature = "fit")]
+impl Cache {
+    fn new(l: usize, mib: f64) -> Self {
+        let bytes = (mib * 1048576.0) as usize;
+        let capacity = (bytes / (4 * l.max(1))).max(2);
+        let n = l + 1;
+        Cache {
+            rows: vec![None; l],
+            prev: vec![l; n],
+            next: vec![l; n],
+            head: l,
+            free_rows: capacity,
+        }
+    }
+
+    fn has(&self, i: usize) -> bool {
+        self.rows[i].is_some()
+    }
+
+    fn unlink(&mut self, i: usize) {
+        let (p, n) = (self.prev[i], self.next[i]);
+        self.next[p] = n;
+        self.prev[n] = p;
+    }
+
+    fn push_back(&mut self, i: usize) {
+        let h = self.head;
+        let last = self.prev[h];
+        self.next[last] = i;
+        self.prev[i] = last;
+        self.next[i] = h;
+        self.prev[h] = i;
+    }
+
+    /// A buffer for row `i`, evicting the least recently used row if the budget is spent.
+    fn take_slot(&mut self, l: usize) -> Vec<f32> {
+        if self.free_rows == 0 {
+            let old = self.next[self.head];
+            self.unlink(old);
+            self.free_rows += 1;
+            if let Some(v) = self.rows[old].take() {
+                self.free_rows -= 1;
+                return v;
+            }
+        }
+        self.free_rows -= 1;
+        vec![0.0; l]
+    }
+
+    fn put(&mut self, i: usize, row: Vec<f32>) {
+        self.rows[i] = Some(row);
+        self.push_back(i);
+    }
+
+    /// Marks row `i` (which must be cached) most recently used.
+    fn touch(&mut self, i: usize) {
+        self.unlink(i);
+        self.push_back(i);
+    }
+
+    fn row(&self, i: usize) -> &[f32] {
+        self.rows[i].as_deref().unwrap_or(&[])
+    }
+}
+
+#[cfg(feature = "fit")]
+struct Solution {
+    alpha: Vec<f64>,
+    rho: f64,
+    n_iter: usize,
+}
+
+#[cfg(feature = "fit")]
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Status {
+    Lower,
+    Upper,
+    Free,
+}
+
+#[cfg(feature = "fit")]
+const TAU: f64 = 1e-12;
+
+/// Active sets at least this large are scanned and updated in parallel chunks. The chunked
+/// reductions keep LIBSVM's tie rule (the last index wins), so the result is the same bit for bit.
+#[cfg(feature = "fit")]
+const PAR_MIN: usize = 16_384;
+
+/// Chunk length for a parallel pass over `a` variables: one chunk per worker thread.
+#[cfg(feature = "fit")]
+fn par_chunk(a: usize) -> usize {
+    a.div_ceil(rayon::current_num_threads().max(1)).max(512)
+}
+
+/// argmax over I_up of −y_t G_t in a slice starting at variable `off` (last index on ties).
+/// `up[t]`: t ∈ I_up, i.e. y_t = +1 and α_t < C, or y_t = −1 and α_t > 0.
+#[cfg(feature = "fit")]
+fn scan_i(g: &[f64], y: &[f64], up: &[bool], off: usize) -> (f64, usize) {
+    let (mut gmax, mut idx) = (f64::NEG_INFINITY, usize::MAX);
+    for (t, ((&g, &y), &up)) in g.iter().zip(y).zip(up).enumerate() {
+        // −y·G with y = ±1 is exactly LIBSVM's −G or G
+        let v = -y * g;
+        if up && v >= gmax {
+            gmax = v;
+            idx = off + t;
+        }
+    }
+    (gmax, idx)
+}
+
+#[cfg(feature = "fit")]
+fn join_i(l: (f64, usize), r: (f64, usize)) -> (f64, usize) {
+    if r.1 != usize::MAX && r.0 >= l.0 {
+        r
+    } else {
+        l
+    }
+}
+
+/// The second half of the working-set selection over a range of variables.
+#[cfg(feature = "fit")]
+struct Pass2<'s> {
+    g: &'s [f64],
+    y: &'s [f64],
+    /// j ∈ I_low: y_j = +1 and α_j > 0, or y_j = −1 and α_j < C
+    low: &'s [bool],
+    qd: &'s [f64],
+    /// Q_ij for every active j (contiguous, as LIBSVM's column buffer).
+    qi: &'s [f32],
+    yi: f64,
+    qdi: f64,
+    gmax: f64,
+}
+
+#[cfg(feature = "fit")]
+#[derive(Clone, Copy)]
+struct Pass2Out {
+    obj_min: f64,
+    idx: usize,
+    gmax2: f64,
+}
+
+#[cfg(feature = "fit")]
+impl Pass2Out {
+    fn none() -> Self {
+        Pass2Out {
+            obj_min: f64::INFINITY,
+            idx: usize::MAX,
+            gmax2: f64::NEG_INFINITY,
+        }
+    }
+
+    fn join(l: Self, r: Self) -> Self {
+        let pick_r = r.idx != usize::MAX && r.obj_min <= l.obj_min;
+        Pass2Out {
+            obj_min: if pick_r { r.obj_min } else { l.obj_min },
+            idx: if pick_r { r.idx } else { l.idx },
+            gmax2: if r.gmax2 >= l.gmax2 { r.gmax2 } else { l.gmax2 },
+        }
+    }
+}
+
+#[cfg(feature = "fit")]
+impl Pass2<'_> {
+    fn run(&self, lo: usize, hi: usize) -> Pass2Out {
+        let mut out = Pass2Out::none();
+        let (gmax, yi, qdi) = (self.gmax, self.yi, self.qdi);
+        let (g, y, low) = (&self.g[lo..hi], &self.y[lo..hi], &self.low[lo..hi]);
+        let (qd, qi) = (&self.qd[lo..hi], &self.qi[lo..hi]);
+        for (t, ((((&gj, &yj), &ok), &qdj), &qij)) in
+            g.iter().zip(y).zip(low).zip(qd).zip(qi).enumerate()
+        {
+            if !ok {
+                continue;
+            }
+            // y_j·G_j is LIBSVM's G_j (y = +1) or −G_j (y = −1), exactly
+            let v = yj * gj;
+            let grad_diff = gmax + v;
+            if v >= out.gmax2 {
+                out.gmax2 = v;
+            }
+            if grad_diff > 0.0 {
+                // −2·y_i·y_j ∈ {±2}: the same rounding as LIBSVM's QD_i + QD_j ∓ 2·y_i·Q_ij
+                let quad = qdi + qdj + (-2.0 * yi * yj) * qij as f64;
+                let obj_diff = if quad > 0.0 {
+                    -(grad_diff * grad_diff) / quad
+                } else {
+                    -(grad_diff * grad_diff) / TAU
+                };
+                if obj_diff <= out.obj_min {
+                    out.idx = lo + t;
+                    out.obj_min = obj_diff;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// LIBSVM's `Solver::Solve` for the SVR problem (all variables share the bound C, α starts at 0).
+#[cfg(feature = "fit")]
+struct Solver<'q, 'a> {
+    q: &'q mut SvrQ<'a>,
+    l: usize,
+    active_size: usize,
+    y: Vec<f32>,
+    /// y as f64, and membership of I_up / I_low, kept in step with `status`
+    yf: Vec<f64>,
+    up: Vec<bool>,
+    low: Vec<bool>,
+    g: Vec<f64>,
+    status: Vec<Status>,
+    alpha: Vec<f64>,
+    p: Vec<f64>,
+    active_set: Vec<usize>,
+    g_bar: Vec<f64>,
+    c: f64,
+    eps: f64,
+    unshrink: bool,
+    /// Column buffers of the working pair; `qi_of` says which (variable, length) `qi` holds.
+    qi: Vec<f32>,
+    qj: Vec<f32>,
+    qi_of: Option<(usize, usize)>,
+}
+
+#[cfg(feature = "fit")]
+fn solve(
+    q: &mut SvrQ<'_>,
+    p: Vec<f64>,
+    c: f64,
+    eps: f64,
+    shrinking: bool,
+    max_iter: Option<usize>,
+) -> Solution {
+    let l = p.len();
+    let mut s = Solver {
+        l,
+        active_size: l,
+        y: q.sign.clone(),
+        yf: q.sign.iter().map(|&s| s as f64).collect(),
+        // α = 0 everywhere: I_up holds the y = +1 variables, I_low the y = −1 ones
+        up: q.sign.iter().map(|&s| s > 0.0).collect(),
+        low: q.sign.iter().map(|&s| s < 0.0).collect(),
+        g: p.clone(),
+        status: vec![Status::Lower; l],
+        alpha: vec![0.0; l],
+        p,
+        active_set: (0..l).collect(),
+        g_bar: vec![0.0; l],
+        c,
+        eps,
+        unshrink: false,
+        qi: vec![0.0; l],
+        qj: vec![0.0; l],
+        qi_of: None,
+        q,
+    };
+    let mut iter = 0usize;
+    let mut counter = l.min(1000) + 1;
+    // the first half of the next selection, computed during the last gradient update
+    let mut first: Option<(f64, usize)> = None;
+    loop {
+        if max_iter.is_some_and(|m| iter >= m) {
+            break;
+        }
+        counter -= 1;
+        if counter == 0 {
+            counter = l.min(1000);
+            if shrinking {
+                s.do_shrinking();
+                first = None;
+            }
+        }
+        let (i, j) = match s.select_working_set(first.take()) {
+            Some(ij) => ij,
+            None => {
+                s.reconstruct_gradient();
+                s.active_size = l;
+                match s.select_working_set(None) {
+                    Some(ij) => {
+                        counter = 1;
+                        ij
+                    }
+                    None => break,
+                }
+            }
+        };
+        iter += 1;
+        first = Some(s.take_step(i, j));
+    }
+    let rho = s.calculate_rho();
+    let mut alpha = vec![0.0; l];
+    for k in 0..l {
+        alpha[s.active_set[k]] = s.alpha[k];
+    }
+    Solution {
+        alpha,
+        rho,
+        n_iter: iter,
+    }
+}
+
+#[cfg(feature = "fit")]
+impl Solver<'_, '_> {
+    fn is_upper(&self, i: usize) -> bool {
+        self.status[i] == Status::Upper
+    }
+    fn is_lower(&self, i: usize) -> bool {
+        self.status[i] == Status::Lower
+    }
+    fn is_free(&self, i: usize) -> bool {
+        self.status[i] == Status::Free
+    }
+    fn update_status(&mut self, i: usize) {
+        let st = if self.alpha[i] >= self.c {
+            Status::Upper
+        } else if self.alpha[i] <= 0.0 {
+            Status::Lower
+        } else {
+            Status::Free
+        };
+        self.status[i] = st;
+        let pos = self.y[i] > 0.0;
+        self.up[i] = if pos {
+            st != Status::Upper
+        } else {
+            st != Status::Lower
+        };
+        self.low[i] = if pos {
+            st != Status::Lower
+        } else {
+            st != Status::Upper
+        };
+    }
+
+    fn swap_index(&mut self, i: usize, j: usize) {
+        self.q.swap_index(i, j);
+        self.y.swap(i, j);
+        self.yf.swap(i, j);
+        self.up.swap(i, j);
+        self.low.swap(i, j);
+        self.g.swap(i, j);
+        self.status.swap(i, j);
+        self.alpha.swap(i, j);
+        self.p.swap(i, j);
+        self.active_set.swap(i, j);
+        self.g_bar.swap(i, j);
+    }
+
+    fn reconstruct_gradient(&mut self) {
+        let (a, l) = (self.active_size, self.l);
+        if a == l {
+            return;
+        }
+        for j in a..l {
+            self.g[j] = self.g_bar[j] + self.p[j];
+        }
+        let nr_free = (0..a).filter(|&j| self.is_free(j)).count();
+        if nr_free * l > 2 * a * (l - a) {
+            for i in a..l {
+                let ri = self.q.col(i);
+                let (di, si) = (self.q.data(ri), self.q.sign[i]);
+                let mut gi = self.g[i];
+                for (((st, al), s), &u) in self.status[..a]
+                    .iter()
+                    .zip(&self.alpha)
+                    .zip(&self.q.sign)
+                    .zip(&self.q.index)
+                {
+                    if *st == Status::Free {
+                        gi += al * (si * s * di[u]) as f64;
+                    }
+                }
+                self.g[i] = gi;
+            }
+        } else {
+            for i in 0..a {
+                if self.is_free(i) {
+                    let ri = self.q.col(i);
+                    let (di, si) = (self.q.data(ri), self.q.sign[i]);
+                    let ai = self.alpha[i];
+                    for ((g, s), &u) in self.g[a..l]
+                        .iter_mut()
+                        .zip(&self.q.sign[a..l])
+                        .zip(&self.q.index[a..l])
+                    {
+                        *g += ai * (si * s * di[u]) as f64;
+                    }
+                }
+            }
+        }
+    }
+
+    /// The first half of the working-set selection: i = argmax over I_up of −y_t G_t (the last
+    /// index on ties, as LIBSVM's `>=`). `None` in the index when I_up is empty.
+    fn select_i(&self) -> (f64, usize) {
+        let a = self.active_size;
+        scan_i(&self.g[..a], &self.yf[..a], &self.up[..a], 0)
+    }
+
+    /// Second-order working-set selection (Fan, Chen & Lin 2005) given the first index
+    /// `(gmax, i)`; `None` when optimal within `eps`.
+    fn select_working_set(&mut self, first: Option<(f64, usize)>) -> Option<(usize, usize)> {
+        let a = self.active_size;
+        let (gmax, i) = first.unwrap_or_else(|| self.select_i());
+        let (mut gmin_idx, mut gmax2) = (usize::MAX, f64::NEG_INFINITY);
+        if i != usize::MAX {
+            self.q.column(i, a, &mut self.qi);
+            self.qi_of = Some((i, a));
+            let ctx = Pass2 {
+                g: &self.g[..a],
+                y: &self.yf[..a],
+                low: &self.low[..a],
+                qd: &self.q.qd[..a],
+                qi: &self.qi[..a],
+                yi: self.y[i] as f64,
+                qdi: self.q.qd[i],
+                gmax,
+            };
+            let r = if a >= PAR_MIN {
+                use rayon::prelude::*;
+                let ch = par_chunk(a);
+                (0..a.div_ceil(ch))
+                    .into_par_iter()
+                    .map(|c| ctx.run(c * ch, ((c + 1) * ch).min(a)))
+                    .reduce(Pass2Out::none, Pass2Out::join)
+            } else {
+                ctx.run(0, a)
+            };
+            gmin_idx = r.idx;
+            gmax2 = r.gmax2;
+        }
+        if gmax + gmax2 < self.eps || gmin_idx == usize::MAX {
+            return None;
+        }
+        Some((i, gmin_idx))
+    }
+
+    /// One SMO step on the pair (i, j); returns the first half of the next working-set
+    /// selection, scanned while the gradient is updated.
+    fn take_step(&mut self, i: usize, j: usize) -> (f64, usize) {
+        let a = self.active_size;
+        let (si, sj) = (self.q.sign[i], self.q.sign[j]);
+        let (ci, cj) = (self.c, self.c);
+        let (old_ai, old_aj) = (self.alpha[i], self.alpha[j]);
+        if self.qi_of != Some((i, a)) {
+            self.q.column(i, a, &mut self.qi);
+        }
+        self.qi_of = None;
+        self.q.column(j, a, &mut self.qj);
+        let qd = &self.q.qd;
+        let qij = self.qi[j] as f64;
+        let (mut ai, mut aj) = (old_ai, old_aj);
+        if self.y[i] != self.y[j] {
+            let mut quad = qd[i] + qd[j] + 2.0 * qij;
+            if quad <= 0.0 {
+                quad = TAU;
+            }
+            let delta = (-self.g[i] - self.g[j]) / quad;
+            let diff = ai - aj;
+            ai += delta;
+            aj += delta;
+            if diff > 0.0 {
+                if aj < 0.0 {
+                    aj = 0.0;
+                    ai = diff;
+                }
+            } else if ai < 0.0 {
+                ai = 0.0;
+                aj = -diff;
+            }
+            if diff > ci - cj {
+                if ai > ci {
+                    ai = ci;
+                    aj = ci - diff;
+                }
+            } else if aj > cj {
+                aj = cj;
+                ai = cj + diff;
+            }
+        } else {
+            let mut quad = qd[i] + qd[j] - 2.0 * qij;
+            if quad <= 0.0 {
+                quad = TAU;
+            }
+            let delta = (self.g[i] - self.g[j]) / quad;
+            let sum = ai + aj;
+            ai -= delta;
+            aj += delta;
+            if sum > ci {
+                if ai > ci {
+                    ai = ci;
+                    aj = sum - ci;
+                }
+            } else if aj < 0.0 {
+                aj = 0.0;
+                ai = sum;
+            }
+            if sum > cj {
+                if aj > cj {
+                    aj = cj;
+                    ai = sum - cj;
+                }
+            } else if ai < 0.0 {
+                ai = 0.0;
+                aj = sum;
+            }
+        }
+        self.alpha[i] = ai;
+        self.alpha[j] = aj;
+        let dai = ai - old_ai;
+        let daj = aj - old_aj;
+        let ui = self.is_upper(i);
+        let uj = self.is_upper(j);
+        self.update_status(i);
+        self.update_status(j);
+        let next = {
+            let (qi, qj) = (&self.qi[..a], &self.qj[..a]);
+            let (y, up) = (&self.yf[..a], &self.up[..a]);
+            let step = |g: &mut [f64], off: usize| {
+                let n = g.len();
+                let sl = off..off + n;
+                for ((g, a), b) in g.iter_mut().zip(&qi[sl.clone()]).zip(&qj[sl.clone()]) {
+                    *g += *a as f64 * dai + *b as f64 * daj;
+                }
+                scan_i(g, &y[sl.clone()], &up[sl], off)
+            };
+            if a >= PAR_MIN {
+                use rayon::prelude::*;
+                let ch = par_chunk(a);
+                self.g[..a]
+                    .par_chunks_mut(ch)
+                    .enumerate()
+                    .map(|(c, g)| step(g, c * ch))
+                    .reduce(|| (f64::NEG_INFINITY, usize::MAX), join_i)
+            } else {
+                step(&mut self.g[..a], 0)
+            }
+        };
+        if ui != self.is_upper(i) {
+            let ri = self.q.col(i);
+            let di = self.q.data(ri);
+            let c = if ui { -ci } else { ci };
+            for ((g, s), &u) in self.g_bar.iter_mut().zip(&self.q.sign).zip(&self.q.index) {
+                *g += c * (si * s * di[u]) as f64;
+            }
+        }
+        if uj != self.is_upper(j) {
+            let rj = self.q.col(j);
+            let dj = self.q.data(rj);
+            let c = if uj { -cj } else { cj };
+            for ((g, s), &u) in self.g_bar.iter_mut().zip(&self.q.sign).zip(&self.q.index) {
+                *g += c * (sj * s * dj[u]) as f64;
+            }
+        }
+        next
+    }
+
+    fn be_shrunk(&self, i: usize, gmax1: f64, gmax2: f64) -> bool {
+        if self.is_upper(i) {
+            if self.y[i] == 1.0 {
+                -self.g[i] > gmax1
+            } else {
+                -self.g[i] > gmax2
+            }
+        } else if self.is_lower(i) {
+            if self.y[i] == 1.0 {
+                self.g[i] > gmax2
+            } else {
+                self.g[i] > gmax1
+            }
+        } else {
+            false
+        }
+    }
+
+    fn do_shrinking(&mut self) {
+        let mut gmax1 = f64::NEG_INFINITY;
+        let mut gmax2 = f64::NEG_INFINITY;
+        for i in 0..self.active_size {
+            let g = self.g[i];
+            if self.y[i] == 1.0 {
+                if !self.is_upper(i) && -g >= gmax1 {
+                    gmax1 = -g;
+                }
+                if !self.is_lower(i) && g >= gmax2 {
+                    gmax2 = g;
+                }
+            } else {
+                if !self.is_upper(i) && -g >= gmax2 {
+                    gmax2 = -g;
+                }
+                if !self.is_lower(i) && g >= gmax1 {
+                    gmax1 = g;
+                }
+            }
+        }
+        if !self.unshrink && gmax1 + gmax2 <= self.eps * 10.0 {
+            self.unshrink = true;
+            self.reconstruct_gradient();
+            self.active_size = self.l;
+        }
+        let mut i = 0;
+        while i < self.active_size {
+            if self.be_shrunk(i, gmax1, gmax2) {
+                self.active_size -= 1;
+                while self.active_size > i {
+                    if !self.be_shrunk(self.active_size, gmax1, gmax2) {
+                        self.swap_index(i, self.active_size);
+                        break;
+                    }
+                    self.active_size -= 1;
+                }
+            }
+            i += 1;
+        }
+    }
+
+    fn calculate_rho(&self) -> f64 {
+        let mut nr_free = 0usize;
+        let (mut ub, mut lb, mut sum_free) = (f64::INFINITY, f64::NEG_INFINITY, 0.0);
+        for i in 0..self.active_size {
+            let yg = self.y[i] as f64 * self.g[i];
+            if self.is_upper(i) {
+                if self.y[i] == -1.0 {
+                    ub = ub.min(yg);
+                } else {
+                    lb = lb.max(yg);
+                }
+            } else if self.is_lower(i) {
+                if self.y[i] == 1.0 {
+                    ub = ub.min(yg);
+                } else {
+                    lb = lb.max(yg);
+                }
+            } else {
+                nr_free += 1;
+                sum_free += yg;
+            }
+        }
+        if nr_free > 0 {
+            sum_free / nr_free as f64
+        } else {
+            (ub + lb) / 2.0
+        }
+    }
+}
+
+#[cfg(all(test, feature = "fit"))]
+mod tests {
+    use super::*;
+
+    fn data(n: usize) -> (Vec<f64>, Vec<f64>) {
+        let x: Vec<f64> = (0..n)
+            .flat_map(|i| {
+                let t = i as f64 / n as f64;
+                [t * 4.0, (t * 7.0).sin(), (t * 3.0).cos()]
+            })
+            .collect();
+        let y = x
+            .chunks(3)
+            .map(|r| r[0].sin() + 0.5 * r[1] - r[2])
+            .collect();
+        (x, y)
+    }
+
+    #[test]
+    fn kkt_holds_at_the_solution() {
+        let (x, y) = data(80);
+        let s = Samples::new(&x, 80, 3).unwrap();
+        let params = SvrParams {
+            c: 3.0,
+            epsilon: 0.05,
+            tol: 1e-6,
+            ..Default::default()
+        };
+        let m = params.fit(s, &y).unwrap();
+        // Σβ = 0 and |β| ≤ C
+        let sum: f64 = m.dual_coef.iter().sum();
+        assert!(sum.abs() < 1e-9, "{sum}");
+        assert!(m.dual_coef.iter().all(|b| b.abs() <= 3.0 + 1e-12));
+        // free SVs sit on the ε-tube (within the f32 kernel cache and tol), bounded ones outside
+        let pred = m.predict(s).unwrap();
+        for (k, &i) in m.support.iter().enumerate() {
+            let r = y[i] - pred[i];
+            if m.dual_coef[k].abs() < 3.0 - 1e-9 {
+                assert!((r.abs() - 0.05).abs() < 1e-4, "free SV {i}: r={r}");
+            } else {
+                assert!(r.abs() >= 0.05 - 1e-4, "bounded SV {i}: r={r}");
+            }
+        }
+        // non-SVs inside the tube
+        for i in 0..80 {
+            if !m.support.contains(&i) {
+                assert!((y[i] - pred[i]).abs() <= 0.05 + 1e-4);
+            }
+        }
+    }
+
+    #[test]
+    fn shrinking_and_tiny_cache_give_the_same_model() {
+        let (x, y) = data(120);
+        let s = Samples::new(&x, 120, 3).unwrap();
+        let base = SvrParams {
+            c: 10.0,
+            epsilon: 0.01,
+            tol: 1e-5,
+            ..Default::default()
+        };
+        let a = base.fit(s, &y).unwrap();
+        let b = SvrParams {
+            shrinking: false,
+            cache_size: 1e-4,
+            ..base.clone()
+        }
+        .fit(s, &y)
+        .unwrap();
+        let pa = a.predict(s).unwrap();
+        let pb = b.predict(s).unwrap();
+        for (u, v) in pa.iter().zip(&pb) {
+            assert!((u - v).abs() < 1e-3, "{u} vs {v}");
+        }
+        // the cache size alone never changes a single bit
+        let c = SvrParams {
+            cache_size: 1e-4,
+            ..base
+        }
+        .fit(s, &y)
+        .unwrap();
+        assert_eq!(a, c);
+    }
+
+    #[test]
+    fn bad_params_are_errors() {
+        let (x, y) = data(10);
+        let s = Samples::new(&x, 10, 3).unwrap();
+        for p in [
+            SvrParams {
+                c: 0.0,
+                ..Default::default()
+            },
+            SvrParams {
+                epsilon: -1.0,
+                ..Default::default()
+            },
+            SvrParams {
+                gamma: Gamma::Value(f64::NAN),
+                ..Default::default()
+            },
+        ] {
+            assert!(p.fit(s, &y).is_err());
+        }
+        assert!(SvrParams::default().fit(s, &y[..9]).is_err());
+    }
+
+    #[test]
+    fn model_json_round_trip() {
+        let (x, y) = data(30);
+        let s = Samples::new(&x, 30, 3).unwrap();
+        let m = SvrParams::default().fit(s, &y).unwrap();
+        let back: SvrModel = serde_json::from_str(&serde_json::to_string(&m).unwrap()).unwrap();
+        assert_eq!(m, back);
+    }
+}
