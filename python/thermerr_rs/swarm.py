@@ -60,8 +60,8 @@ def cso(
 
     ``f`` is a callable taking a point (1-D array) and returning a float — or, with
     ``vectorized=True``, taking the population (pop × dim) and returning pop floats — or the name of
-    a built-in objective (``"sphere"``, ``"rosenbrock"``, ``"rastrigin"``), evaluated natively in
-    parallel. Every G generations the swarm is ranked: the best ``roosters``·pop are roosters, the
+    a built-in objective (``"sphere"``, ``"rosenbrock"``, ``"rastrigin"``), evaluated natively
+    without the GIL. Every G generations the swarm is ranked: the best ``roosters``·pop are roosters, the
     worst (1 − roosters − hens)·pop chicks, the rest hens; moves follow methods.md §6 with each
     chicken's personal best as memory. Non-finite values count as +∞. The same seed gives the
     same result.

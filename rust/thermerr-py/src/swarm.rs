@@ -6,8 +6,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyAny;
 use thermerr_core::svr::SvrParams;
 use thermerr_core::swarm::{
-    cso_minimize, cso_minimize_batch, pso_minimize, pso_minimize_batch, Bounds, CsoParams,
-    PsoParams, SwarmResult,
+    cso_minimize_batch, pso_minimize_batch, Bounds, CsoParams, PsoParams, SwarmResult,
 };
 use thermerr_core::tune::{self, Scale, Search, TuneParams};
 use thermerr_core::Error;
@@ -96,8 +95,8 @@ fn out(r: SwarmResult) -> Out {
 
 /// Minimises `f` over the box `bounds` with CSO or PSO: (x, f, history, n_evals).
 ///
-/// `f` is the name of a built-in objective ("sphere", "rosenbrock", "rastrigin"; evaluated in
-/// parallel without the GIL) or a Python callable taking one point (a 1-D array) and returning
+/// `f` is the name of a built-in objective ("sphere", "rosenbrock", "rastrigin"; evaluated
+/// natively without the GIL) or a Python callable taking one point (a 1-D array) and returning
 /// a float — or, with `vectorized=True`, the whole population (pop × dim) returning pop floats.
 #[pyfunction]
 #[pyo3(signature = (f, bounds, *, method = "cso", pop = 20, iters = 100, g = 10, roosters = 0.2, hens = 0.6, fl = (0.4, 1.0), w = 0.7298, c1 = 1.49618, c2 = 1.49618, vmax_frac = 0.2, seed = 0, vectorized = false))]
@@ -133,10 +132,13 @@ fn swarm_minimize(
                 ),
             })
         })?;
+        // the built-ins are cheap: evaluated serially (handing 20 of them to rayon per
+        // generation costs more than it saves), without the GIL
+        let batch = |p: &[Vec<f64>]| Ok(p.iter().map(|x| obj(x)).collect());
         let r = py
             .detach(|| match &m {
-                Method::Cso(p) => cso_minimize(obj, &b, p),
-                Method::Pso(p) => pso_minimize(obj, &b, p),
+                Method::Cso(p) => cso_minimize_batch(batch, &b, p),
+                Method::Pso(p) => pso_minimize_batch(batch, &b, p),
             })
             .map_err(PyErrWrap)?;
         return Ok(out(r));
