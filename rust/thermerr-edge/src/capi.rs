@@ -1,0 +1,150 @@
+//! The C ABI (`include/thermerr_edge.h`): open a model file, predict one sample into the caller's
+//! buffer, reset, close; negative status codes and a thread-local message for failures. No Rust
+//! panic crosses this boundary.
+
+use std::cell::RefCell;
+use std::ffi::{c_char, c_int, CStr, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+use crate::Predictor;
+
+/// Status codes of `te_predict` (also in the header).
+pub const TE_OK: c_int = 0;
+pub const TE_ERR_NULL: c_int = -1;
+pub const TE_ERR_FEATURES: c_int = -2;
+pub const TE_ERR_INPUT: c_int = -3;
+pub const TE_ERR_PANIC: c_int = -4;
+
+/// An opened model (opaque to C).
+pub struct TeModel {
+    p: Predictor,
+}
+
+thread_local! {
+    static LAST_ERROR: RefCell<CString> = RefCell::new(CString::default());
+}
+
+fn set_error(msg: &str) {
+    let c = CString::new(msg.replace('\0', " ")).unwrap_or_default();
+    LAST_ERROR.with(|e| *e.borrow_mut() = c);
+}
+
+/// Opens a model file; NULL on failure (see `te_last_error`).
+///
+/// # Safety
+/// `path` must be NULL or a NUL-terminated string.
+#[no_mangle]
+pub unsafe extern "C" fn te_open(path: *const c_char) -> *mut TeModel {
+    if path.is_null() {
+        set_error("te_open: path is NULL");
+        return std::ptr::null_mut();
+    }
+    let r = catch_unwind(|| {
+        // SAFETY: the caller passes a NUL-terminated string
+        let s = unsafe { CStr::from_ptr(path) }
+            .to_string_lossy()
+            .into_owned();
+        Predictor::load(s)
+    });
+    match r {
+        Ok(Ok(p)) => Box::into_raw(Box::new(TeModel { p })),
+        Ok(Err(e)) => {
+            set_error(&e.to_string());
+            std::ptr::null_mut()
+        }
+        Err(_) => {
+            set_error("te_open: internal error (panic)");
+            std::ptr::null_mut()
+        }
+    }
+}
+
+/// Number of features the model takes (-1 if `m` is NULL).
+///
+/// # Safety
+/// `m` must be NULL or a pointer returned by `te_open` and not yet closed.
+#[no_mangle]
+pub unsafe extern "C" fn te_n_features(m: *const TeModel) -> c_int {
+    // SAFETY: per the contract above
+    match unsafe { m.as_ref() } {
+        Some(m) => m.p.n_features() as c_int,
+        None => TE_ERR_NULL,
+    }
+}
+
+/// Predicts the next sample of the run: `n` readings at `x` (in the model's feature order), the
+/// prediction written to `*out`. Returns 0, or a negative code: -1 a NULL argument, -2 the wrong
+/// number of features, -3 a non-finite reading, -4 an internal error. Allocates nothing on
+/// success.
+///
+/// # Safety
+/// `m` as for `te_n_features`; `x` must point to `n` doubles and `out` to one writable double.
+#[no_mangle]
+pub unsafe extern "C" fn te_predict(
+    m: *mut TeModel,
+    x: *const f64,
+    n: usize,
+    out: *mut f64,
+) -> c_int {
+    if m.is_null() || x.is_null() || out.is_null() {
+        set_error("te_predict: NULL argument");
+        return TE_ERR_NULL;
+    }
+    let r = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: per the contract above
+        let (m, xs) = unsafe { (&mut *m, std::slice::from_raw_parts(x, n)) };
+        if n != m.p.n_features() {
+            set_error(&format!(
+                "te_predict: the model takes {} features, got {n}",
+                m.p.n_features()
+            ));
+            return TE_ERR_FEATURES;
+        }
+        match m.p.predict_sample(xs) {
+            Ok(v) => {
+                // SAFETY: per the contract above
+                unsafe { *out = v };
+                TE_OK
+            }
+            Err(e) => {
+                set_error(&e.to_string());
+                TE_ERR_INPUT
+            }
+        }
+    }));
+    r.unwrap_or_else(|_| {
+        set_error("te_predict: internal error (panic)");
+        TE_ERR_PANIC
+    })
+}
+
+/// Starts a new run (forgets the first sample and accumulated state).
+///
+/// # Safety
+/// `m` as for `te_n_features`.
+#[no_mangle]
+pub unsafe extern "C" fn te_reset(m: *mut TeModel) {
+    // SAFETY: per the contract above
+    if let Some(m) = unsafe { m.as_mut() } {
+        m.p.reset();
+    }
+}
+
+/// Frees a model opened by `te_open` (NULL is ignored).
+///
+/// # Safety
+/// `m` must be NULL or a pointer returned by `te_open`, closed at most once.
+#[no_mangle]
+pub unsafe extern "C" fn te_close(m: *mut TeModel) {
+    if !m.is_null() {
+        // SAFETY: per the contract above
+        drop(unsafe { Box::from_raw(m) });
+    }
+}
+
+/// The message of the last failure on this thread ("" if none). Valid until the next call on
+/// this thread.
+#[no_mangle]
+pub extern "C" fn te_last_error() -> *const c_char {
+    LAST_ERROR.with(|e| e.borrow().as_ptr())
+}

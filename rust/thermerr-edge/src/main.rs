@@ -1,0 +1,213 @@
+//! `thermerr-edge MODEL.json [RUN.csv]`: reads CSV rows (a header first) from the file or from
+//! stdin and writes `time_s,E_<axis>_pred` line by line as rows arrive, flushing each line, so it
+//! can sit in a pipe from a data logger. A bad row is reported on stderr with its line number and
+//! skipped. The model's feature columns are picked by name; other columns are ignored.
+//!
+//! `--bench-latency N` times N predictions over the run's rows (cycling, with a reset at each
+//! pass) and prints per-sample latency percentiles and the peak resident memory as JSON.
+
+use std::io::{BufRead, BufReader, Write};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use thermerr_edge::Predictor;
+
+const USAGE: &str = "usage: thermerr-edge MODEL.json [RUN.csv] [--bench-latency N]
+  Reads CSV rows (header first) from RUN.csv or stdin, writes time_s,<target>_pred per row.";
+
+fn fail(msg: impl std::fmt::Display) -> ExitCode {
+    eprintln!("thermerr-edge: error: {msg}");
+    ExitCode::from(2)
+}
+
+struct Columns {
+    features: Vec<usize>,
+    time: Option<usize>,
+    width: usize,
+}
+
+fn columns(header: &str, p: &Predictor) -> Result<Columns, String> {
+    let names: Vec<&str> = header
+        .trim_start_matches('\u{feff}')
+        .trim_end_matches(['\r', '\n'])
+        .split(',')
+        .map(str::trim)
+        .collect();
+    let wanted = p
+        .features()
+        .ok_or("the model does not record its feature columns (fit it on a run)")?;
+    let mut missing = Vec::new();
+    let mut features = Vec::with_capacity(wanted.len());
+    for w in wanted {
+        match names.iter().position(|n| n == w) {
+            Some(k) => features.push(k),
+            None => missing.push(w.as_str()),
+        }
+    }
+    if !missing.is_empty() {
+        return Err(format!(
+            "the input has no column {} (columns are: {})",
+            missing.join(", "),
+            names.join(", ")
+        ));
+    }
+    Ok(Columns {
+        features,
+        time: names.iter().position(|n| *n == "time_s"),
+        width: names.len(),
+    })
+}
+
+/// Parses the model's features of one data line into `x`; the time field as written.
+fn parse_row<'l>(
+    line: &'l str,
+    cols: &Columns,
+    names: &[String],
+    x: &mut [f64],
+) -> Result<Option<&'l str>, String> {
+    let f: Vec<&str> = line.split(',').collect();
+    if f.len() != cols.width {
+        return Err(format!("expected {} fields, got {}", cols.width, f.len()));
+    }
+    for ((xv, &k), name) in x.iter_mut().zip(&cols.features).zip(names) {
+        let raw = f[k].trim();
+        match raw.parse::<f64>() {
+            Ok(v) if v.is_finite() => *xv = v,
+            _ => return Err(format!("column `{name}`: not a finite number ({raw:?})")),
+        }
+    }
+    Ok(cols.time.map(|k| f[k].trim()))
+}
+
+fn run(p: &mut Predictor, input: Box<dyn BufRead>, bench: Option<usize>) -> ExitCode {
+    let mut lines = input.lines();
+    let header = match lines.next() {
+        Some(Ok(h)) => h,
+        Some(Err(e)) => return fail(format!("cannot read the header: {e}")),
+        None => return fail("the input is empty (a header row is expected)"),
+    };
+    let cols = match columns(&header, p) {
+        Ok(c) => c,
+        Err(e) => return fail(e),
+    };
+    let names: Vec<String> = p.features().map(<[String]>::to_vec).unwrap_or_default();
+    let target = p.target().unwrap_or("E").to_string();
+    let mut x = vec![0.0; p.n_features()];
+    if let Some(n) = bench {
+        let mut rows = Vec::new();
+        for line in lines.map_while(Result::ok) {
+            if parse_row(&line, &cols, &names, &mut x).is_ok() {
+                rows.push(x.clone());
+            }
+        }
+        return latency(p, &rows, n);
+    }
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    if writeln!(out, "time_s,{target}_pred").is_err() {
+        return ExitCode::SUCCESS; // the reader went away
+    }
+    let mut row = 0usize;
+    for (k, line) in lines.enumerate() {
+        let lineno = k + 2;
+        let line = match line {
+            Ok(l) => l,
+            Err(e) => {
+                eprintln!("thermerr-edge: line {lineno}: {e}; skipped");
+                continue;
+            }
+        };
+        let l = line.trim_end_matches('\r');
+        if l.trim().is_empty() {
+            continue;
+        }
+        match parse_row(l, &cols, &names, &mut x) {
+            Ok(t) => match p.predict_sample(&x) {
+                Ok(y) => {
+                    let ok = match t {
+                        Some(t) => writeln!(out, "{t},{y}"),
+                        None => writeln!(out, "{row},{y}"),
+                    };
+                    if ok.and_then(|_| out.flush()).is_err() {
+                        return ExitCode::SUCCESS;
+                    }
+                    row += 1;
+                }
+                Err(e) => eprintln!("thermerr-edge: line {lineno}: {e}; skipped"),
+            },
+            Err(e) => eprintln!("thermerr-edge: line {lineno}: {e}; skipped"),
+        }
+    }
+    ExitCode::SUCCESS
+}
+
+/// Per-sample latency over `n` predictions, cycling through `rows`.
+fn latency(p: &mut Predictor, rows: &[Vec<f64>], n: usize) -> ExitCode {
+    if rows.is_empty() {
+        return fail("no valid rows to time");
+    }
+    let mut ns = Vec::with_capacity(n);
+    let mut sink = 0.0;
+    for k in 0..n {
+        let i = k % rows.len();
+        if i == 0 {
+            p.reset();
+        }
+        let t = Instant::now();
+        match p.predict_sample(&rows[i]) {
+            Ok(y) => sink += y,
+            Err(e) => return fail(e),
+        }
+        ns.push(t.elapsed().as_nanos() as f64);
+    }
+    ns.sort_by(f64::total_cmp);
+    let q = |f: f64| ns[((ns.len() - 1) as f64 * f).round() as usize];
+    let rss_kib = std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1).map(str::to_string))
+        })
+        .unwrap_or_else(|| "null".into());
+    println!(
+        "{{\"kind\": \"{}\", \"samples\": {n}, \"p50_ns\": {}, \"p99_ns\": {}, \"mean_ns\": {:.1}, \"max_rss_kib\": {rss_kib}, \"checksum\": {sink}}}",
+        p.kind(),
+        q(0.5),
+        q(0.99),
+        ns.iter().sum::<f64>() / n as f64
+    );
+    ExitCode::SUCCESS
+}
+
+fn main() -> ExitCode {
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let mut bench = None;
+    if let Some(k) = args.iter().position(|a| a == "--bench-latency") {
+        match args.get(k + 1).and_then(|v| v.parse::<usize>().ok()) {
+            Some(n) if n > 0 => bench = Some(n),
+            _ => return fail("--bench-latency takes a positive number of samples"),
+        }
+        args.drain(k..k + 2);
+    }
+    if args.iter().any(|a| a == "-h" || a == "--help") {
+        println!("{USAGE}");
+        return ExitCode::SUCCESS;
+    }
+    if args.is_empty() || args.len() > 2 {
+        eprintln!("{USAGE}");
+        return ExitCode::from(2);
+    }
+    let mut p = match Predictor::load(&args[0]) {
+        Ok(p) => p,
+        Err(e) => return fail(e),
+    };
+    let input: Box<dyn BufRead> = match args.get(1) {
+        Some(path) => match std::fs::File::open(path) {
+            Ok(f) => Box::new(BufReader::new(f)),
+            Err(e) => return fail(format!("{path}: {e}")),
+        },
+        None => Box::new(BufReader::new(std::io::stdin())),
+    };
+    run(&mut p, input, bench)
+}

@@ -1,0 +1,258 @@
+//! The edge against the Python library's own predictions (fixtures written by
+//! `tests/fixtures/make_fixtures.py`), its refusals, the binary, and the C ABI.
+
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use thermerr_edge::{EdgeError, Predictor};
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/fixtures")
+}
+
+/// The fixture run's columns by name.
+fn run() -> (Vec<String>, Vec<Vec<f64>>) {
+    let text = std::fs::read_to_string(fixtures().join("run_60.csv")).unwrap();
+    let mut lines = text.lines();
+    let names: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+    let rows = lines
+        .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    (names, rows)
+}
+
+fn expected() -> HashMap<String, Vec<f64>> {
+    serde_json::from_str(&std::fs::read_to_string(fixtures().join("expected.json")).unwrap())
+        .unwrap()
+}
+
+const MODELS: [&str; 4] = [
+    "mlr_rise",
+    "rbf_ols_minmax_rise",
+    "rbf_exact_ago",
+    "svr_rise",
+];
+
+#[test]
+fn predictions_equal_the_library() {
+    let (names, rows) = run();
+    let want = expected();
+    for name in MODELS {
+        let mut p = Predictor::load(fixtures().join(format!("{name}.json"))).unwrap();
+        let idx: Vec<usize> = p
+            .features()
+            .unwrap()
+            .iter()
+            .map(|f| names.iter().position(|n| n == f).unwrap())
+            .collect();
+        let mut x = vec![0.0; idx.len()];
+        for (k, row) in rows.iter().enumerate() {
+            for (v, &j) in x.iter_mut().zip(&idx) {
+                *v = row[j];
+            }
+            let y = p.predict_sample(&x).unwrap();
+            let w = want[name][k];
+            // the same code on the same bits: equal up to the last place of the JSON numbers
+            // (they round-trip exactly), so 1e-12 relative is a generous bound
+            assert!(
+                (y - w).abs() <= 1e-12 * w.abs().max(1.0),
+                "{name} row {k}: edge {y} vs library {w}"
+            );
+        }
+        // a reset starts the run again
+        p.reset();
+        for (v, &j) in x.iter_mut().zip(&idx) {
+            *v = rows[0][j];
+        }
+        assert_eq!(p.predict_sample(&x).unwrap(), want[name][0]);
+    }
+}
+
+fn with(text: &str, from: &str, to: &str) -> String {
+    assert!(text.contains(from), "{from}");
+    text.replacen(from, to, 1)
+}
+
+#[test]
+fn bad_model_files_are_clear_errors() {
+    let good = std::fs::read_to_string(fixtures().join("mlr_rise.json")).unwrap();
+    let cases = [
+        (
+            with(&good, "\"format_version\": 1", "\"format_version\": 2"),
+            "format_version 2",
+        ),
+        (
+            with(&good, "\"kind\": \"mlr\"", "\"kind\": \"forest\""),
+            "unknown model kind",
+        ),
+        (
+            with(&good, "\"n_features\": 4", "\"n_features\": 3"),
+            "n_features is 3",
+        ),
+        (
+            with(&good, "\"inputs\": \"rise\"", "\"inputs\": \"delta\""),
+            "inputs",
+        ),
+        (
+            with(&good, "\"model\":", "\"mode\":"),
+            "missing field `model`",
+        ),
+        ("not json".to_string(), "expected"),
+    ];
+    for (text, msg) in cases {
+        match Predictor::from_json(&text) {
+            Err(EdgeError::Format(m)) => assert!(m.contains(msg), "{m} lacks {msg}"),
+            other => panic!("{msg}: {other:?}"),
+        }
+    }
+    let rbf = std::fs::read_to_string(fixtures().join("rbf_ols_minmax_rise.json")).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&rbf).unwrap();
+    let mut bad = v.clone();
+    bad["model"]["centers"]["shape"][0] = serde_json::json!(99);
+    assert!(Predictor::from_json(&bad.to_string()).is_err());
+    let mut bad = v;
+    bad["preprocessing"]["x_max"] = serde_json::json!([1.0]);
+    let e = Predictor::from_json(&bad.to_string())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("preprocessing"), "{e}");
+    let e = Predictor::load(fixtures().join("nope.json")).unwrap_err();
+    assert!(matches!(e, EdgeError::Io { .. }), "{e}");
+}
+
+#[test]
+fn bad_samples_are_errors_and_leave_the_state_alone() {
+    let mut p = Predictor::load(fixtures().join("rbf_exact_ago.json")).unwrap();
+    assert!(p.stateful());
+    assert!(p.predict_sample(&[1.0, 2.0]).is_err());
+    assert!(p.predict_sample(&[20.0, f64::NAN, 20.0, 20.0]).is_err());
+    let mut q = Predictor::load(fixtures().join("rbf_exact_ago.json")).unwrap();
+    let x = [20.3, 20.2, 20.3, 20.3];
+    assert_eq!(p.predict_sample(&x).unwrap(), q.predict_sample(&x).unwrap());
+}
+
+fn exe() -> PathBuf {
+    PathBuf::from(env!("CARGO_BIN_EXE_thermerr-edge"))
+}
+
+#[test]
+fn binary_streams_predictions_and_skips_bad_rows() {
+    let (names, rows) = run();
+    let mut csv = names.join(",") + "\n";
+    for (k, r) in rows.iter().take(5).enumerate() {
+        let mut f: Vec<String> = r.iter().map(|v| v.to_string()).collect();
+        if k == 2 {
+            let j = names.iter().position(|n| n == "T_s07").unwrap();
+            f[j] = "oops".into();
+        }
+        csv += &(f.join(",") + "\n");
+    }
+    csv += "1,2,3\n";
+    let path = std::env::temp_dir().join(format!("edge_rows_{}.csv", std::process::id()));
+    std::fs::write(&path, csv).unwrap();
+    let out = Command::new(exe())
+        .arg(fixtures().join("mlr_rise.json"))
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(lines[0], "time_s,E_z_pred");
+    assert_eq!(lines.len(), 1 + 4, "{stdout}");
+    let want = &expected()["mlr_rise"];
+    let got: f64 = lines[1].split(',').nth(1).unwrap().parse().unwrap();
+    assert_eq!(got, want[0]);
+    let got: f64 = lines[4].split(',').nth(1).unwrap().parse().unwrap();
+    assert_eq!(got, want[4]);
+    let stderr = String::from_utf8(out.stderr).unwrap();
+    assert!(stderr.contains("line 4: column `T_s07`"), "{stderr}");
+    assert!(stderr.contains("line 7: expected"), "{stderr}");
+    // a run without a feature column is refused, naming it
+    std::fs::write(&path, "time_s,T_s01\n0,20\n").unwrap();
+    let out = Command::new(exe())
+        .arg(fixtures().join("mlr_rise.json"))
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("T_s07"));
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn c_program_prints_the_same_numbers() {
+    let gcc = Command::new("gcc").arg("--version").output();
+    if gcc.is_err() {
+        eprintln!("gcc not found: C ABI test skipped");
+        return;
+    }
+    // the staticlib cargo built next to this test's binary
+    let dir = exe().parent().unwrap().to_path_buf();
+    let lib = [
+        dir.join("libthermerr_edge.a"),
+        dir.join("deps/libthermerr_edge.a"),
+    ]
+    .into_iter()
+    .find(|p| p.exists())
+    .expect("cargo builds the staticlib with the tests");
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let bin = std::env::temp_dir().join(format!("te_demo_{}", std::process::id()));
+    let st = Command::new("gcc")
+        .arg(manifest.join("tests/c/demo.c"))
+        .arg("-I")
+        .arg(manifest.join("include"))
+        .arg(&lib)
+        .args(["-lpthread", "-ldl", "-lm", "-o"])
+        .arg(&bin)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let (names, rows) = run();
+    let model = fixtures().join("svr_rise.json");
+    let p = Predictor::load(&model).unwrap();
+    let idx: Vec<usize> = p
+        .features()
+        .unwrap()
+        .iter()
+        .map(|f| names.iter().position(|n| n == f).unwrap())
+        .collect();
+    let input: String = rows
+        .iter()
+        .map(|r| {
+            idx.iter()
+                .map(|&j| format!("{:?}", r[j]))
+                .collect::<Vec<_>>()
+                .join(" ")
+                + "\n"
+        })
+        .collect();
+    let mut child = Command::new(&bin)
+        .arg(&model)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    use std::io::Write;
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(input.as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success());
+    let got: Vec<f64> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect();
+    let want = &expected()["svr_rise"];
+    assert_eq!(got.len(), want.len());
+    for (g, w) in got.iter().zip(want) {
+        // printed with %.17g: the exact double
+        assert_eq!(g, w);
+    }
+    let _ = std::fs::remove_file(&bin);
+}
