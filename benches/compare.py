@@ -2,7 +2,7 @@
 
     pip install ".[test]"            # release build of the extension + scikit-learn, scikit-fuzzy
     python benches/compare.py        # all families
-    python benches/compare.py mlr    # one family (mlr, fcm, rbf, svr, tune, thermal)
+    python benches/compare.py mlr    # one family (mlr, fcm, rbf, svr, tune, thermal, edge)
     python benches/compare.py --quick   # smaller sizes only
 
 ratio = reference time / our time (> 1: we are faster). Times are the best of a few runs, in s.
@@ -20,7 +20,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-FAMILIES = ["mlr", "fcm", "rbf", "svr", "tune", "thermal"]
+FAMILIES = ["mlr", "fcm", "rbf", "svr", "tune", "thermal", "edge"]
 
 
 def print_table(rows: list[dict]) -> None:
@@ -28,7 +28,7 @@ def print_table(rows: list[dict]) -> None:
     print(head)
     print("-" * len(head))
     for r in rows:
-        print(f"{r['task']:<24} {r['size']:>16} {r['ours_s']:>16.5f} {r['ref_s']:>14.5f} "
+        print(f"{r['task']:<24} {r['size']:>16} {r['ours_s']:>16.4g} {r['ref_s']:>14.4g} "
               f"{r['ratio']:>7.1f}x  {r.get('note', '')}")
 
 
