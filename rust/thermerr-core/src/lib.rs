@@ -17,6 +17,7 @@ pub mod kmeans;
 pub mod linalg;
 pub mod linear;
 pub mod metrics;
+pub mod nn;
 #[cfg(feature = "fit")]
 pub mod optim;
 pub mod rbf;
