@@ -11,6 +11,7 @@
 pub mod error;
 #[cfg(feature = "fit")]
 pub mod fcm;
+pub mod grey;
 #[cfg(feature = "fit")]
 pub mod kmeans;
 #[cfg(feature = "fit")]

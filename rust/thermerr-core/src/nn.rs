@@ -12,9 +12,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::Result;
 #[cfg(feature = "fit")]
 use crate::error::Error;
+use crate::error::Result;
 #[cfg(feature = "fit")]
 use crate::samples::{check_target, Samples};
 
@@ -180,7 +180,10 @@ impl MlpParams {
             return Err(Error::param("hidden", "layer widths must be >= 1"));
         }
         if !(self.init > 0.0 && self.init.is_finite()) {
-            return Err(Error::param("init", format!("must be > 0, got {}", self.init)));
+            return Err(Error::param(
+                "init",
+                format!("must be > 0, got {}", self.init),
+            ));
         }
         if !(self.output_scale.is_finite() && self.output_scale != 0.0) {
             return Err(Error::param("output_scale", "must be finite and non-zero"));
@@ -260,7 +263,10 @@ impl MlpParams {
                     if mse <= goal {
                         break;
                     }
-                    for ((p, v), g) in params_mut(&mut net).zip(flat_mut(&mut vel)).zip(flat(&grad)) {
+                    for ((p, v), g) in params_mut(&mut net)
+                        .zip(flat_mut(&mut vel))
+                        .zip(flat(&grad))
+                    {
                         *v = momentum * *v - lr * g;
                         *p += *v;
                     }
@@ -416,7 +422,9 @@ mod tests {
 
     #[test]
     fn gradient_matches_finite_differences() {
-        let x: Vec<f64> = (0..20).flat_map(|i| [i as f64 / 10.0, (i as f64).sin()]).collect();
+        let x: Vec<f64> = (0..20)
+            .flat_map(|i| [i as f64 / 10.0, (i as f64).sin()])
+            .collect();
         let y: Vec<f64> = x.chunks(2).map(|r| r[0] * r[1] + 0.3).collect();
         let s = Samples::new(&x, 20, 2).unwrap();
         for (hidden, output, scale) in [
@@ -463,7 +471,11 @@ mod tests {
         });
         let a = adam.fit(s, &y).unwrap();
         // measured: reaches the 1e-4 goal in about 1–2 thousand epochs
-        assert!(*a.history.last().unwrap() <= 1e-4 * 1.01, "{:?}", a.history.last());
+        assert!(
+            *a.history.last().unwrap() <= 1e-4 * 1.01,
+            "{:?}",
+            a.history.last()
+        );
         let b = adam.fit(s, &y).unwrap();
         assert_eq!(a.net, b.net);
         let gd = params(Trainer::Gd {
