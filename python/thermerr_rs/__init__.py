@@ -20,6 +20,7 @@ from .errors import (
     ThermerrError,
 )
 from .fcm import FuzzyCMeans
+from .grey import GM1N, BPNetwork, GreyBP
 from .linear import MLR
 from .metrics import Scores, scores
 from .preprocessing import AGORegressor, MinMaxAGO, spread_search
@@ -49,6 +50,9 @@ __all__ = [
     "AGORegressor",
     "spread_search",
     "SVR",
+    "GreyBP",
+    "GM1N",
+    "BPNetwork",
     "cso",
     "pso",
     "SwarmResult",

@@ -237,3 +237,62 @@ def tune_svr(
     seed: int = 0,
     progress: Any = None,
 ) -> tuple[float, float, float, list[float], int, SvrModel]: ...
+
+# --- seed 002: grey models and BP networks -------------------------------------------------------
+@final
+class GreyModel:
+    @staticmethod
+    def fit(
+        x: _F64,
+        y: _F64,
+        *,
+        windows: list[int],
+        net: bool = True,
+        hidden: int = 7,
+        trainer: str = "seed",
+        lr: float = 0.01,
+        momentum: float = 0.9,
+        max_epochs: int = 8000,
+        goal: float = 0.01,
+        patience: int = 500,
+        init: float = 1.0,
+        seed: int = 0,
+    ) -> GreyModel: ...
+    def predict(self, x: _F64, y: _F64 | None = None) -> _F64: ...
+    @property
+    def windows(self) -> list[int]: ...
+    @property
+    def history(self) -> _F64: ...
+    @property
+    def n_features(self) -> int: ...
+    def to_json(self) -> str: ...
+    @staticmethod
+    def from_json(text: str) -> GreyModel: ...
+
+@final
+class BpModel:
+    @staticmethod
+    def fit(
+        x: _F64,
+        y: _F64,
+        *,
+        hidden: list[int] = ...,
+        trainer: str = "seed",
+        lr: float = 0.01,
+        momentum: float = 0.9,
+        max_epochs: int = 8000,
+        goal: float = 0.01,
+        patience: int = 500,
+        init: float = 1.0,
+        seed: int = 0,
+    ) -> BpModel: ...
+    def predict(self, x: _F64) -> _F64: ...
+    @property
+    def history(self) -> _F64: ...
+    @property
+    def n_features(self) -> int: ...
+    def to_json(self) -> str: ...
+    @staticmethod
+    def from_json(text: str) -> BpModel: ...
+
+def gm1n_window(e: _F64, t: _F64, t_next: _F64) -> tuple[_F64, float]: ...

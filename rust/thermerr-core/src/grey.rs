@@ -228,6 +228,8 @@ pub struct GreyBpModel {
     /// Training range of the error (the network's output scaling).
     pub y_min: f64,
     pub y_max: f64,
+    /// absent for a GM alone
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub net: Option<Mlp>,
 }
 

@@ -129,6 +129,59 @@ impl Mlp {
     }
 }
 
+/// A BP network regressor on min–max scaled inputs and output (seed 002's "BP alone").
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BpModel {
+    pub x_min: Vec<f64>,
+    pub x_max: Vec<f64>,
+    pub y_min: f64,
+    pub y_max: f64,
+    pub net: Mlp,
+}
+
+impl BpModel {
+    pub fn n_features(&self) -> usize {
+        self.x_min.len()
+    }
+
+    /// Checks a model read from a file.
+    pub fn validate(&self) -> std::result::Result<(), String> {
+        self.net.validate()?;
+        if self.x_max.len() != self.x_min.len() || self.net.n_inputs() != self.x_min.len() {
+            return Err("bp model: input ranges do not match the network".into());
+        }
+        Ok(())
+    }
+
+    /// Scratch length of [`BpModel::predict_one`].
+    pub fn scratch_len(&self) -> usize {
+        self.n_features() + self.net.scratch_len()
+    }
+
+    /// One sample, no allocation.
+    pub fn predict_one(&self, x: &[f64], scratch: &mut [f64]) -> f64 {
+        let (xs, s) = scratch.split_at_mut(self.n_features());
+        for (j, v) in xs.iter_mut().enumerate() {
+            let span = self.x_max[j] - self.x_min[j];
+            *v = if span > 0.0 {
+                (x[j] - self.x_min[j]) / span
+            } else {
+                0.5
+            };
+        }
+        self.net.predict_one(xs, s) * (self.y_max - self.y_min) + self.y_min
+    }
+
+    pub fn predict(&self, x: crate::samples::Samples<'_>) -> Result<Vec<f64>> {
+        crate::linear::check_features(x.ncols(), self.n_features())?;
+        x.require_finite("X")?;
+        let mut scratch = vec![0.0; self.scratch_len()];
+        Ok(x.rows()
+            .map(|r| self.predict_one(r, &mut scratch))
+            .collect())
+    }
+}
+
 /// How a network is trained.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "lowercase")]
@@ -320,6 +373,42 @@ impl MlpParams {
             }
         };
         Ok(Trained { net, history })
+    }
+}
+
+#[cfg(feature = "fit")]
+impl MlpParams {
+    /// Fits a [`BpModel`]: inputs and target min–max scaled by the training ranges.
+    pub fn fit_bp(&self, x: Samples<'_>, y: &[f64]) -> Result<(BpModel, Vec<f64>)> {
+        x.require_finite("X")?;
+        check_target(y, x.nrows())?;
+        let d = x.ncols();
+        let mut x_min = vec![f64::INFINITY; d];
+        let mut x_max = vec![f64::NEG_INFINITY; d];
+        for r in x.rows() {
+            for j in 0..d {
+                x_min[j] = x_min[j].min(r[j]);
+                x_max[j] = x_max[j].max(r[j]);
+            }
+        }
+        let y_min = y.iter().copied().fold(f64::INFINITY, f64::min);
+        let y_max = y.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let scale = |v: f64, lo: f64, hi: f64| if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
+        let xs: Vec<f64> = x
+            .rows()
+            .flat_map(|r| (0..d).map(move |j| (j, r[j])))
+            .map(|(j, v)| scale(v, x_min[j], x_max[j]))
+            .collect();
+        let ys: Vec<f64> = y.iter().map(|&v| scale(v, y_min, y_max)).collect();
+        let t = self.fit(Samples::new(&xs, y.len(), d)?, &ys)?;
+        let model = BpModel {
+            x_min,
+            x_max,
+            y_min,
+            y_max,
+            net: t.net,
+        };
+        Ok((model, t.history))
     }
 }
 

@@ -3,6 +3,7 @@
 
 mod error;
 mod fcm;
+mod grey;
 mod linear;
 mod rbf;
 mod run;
@@ -55,6 +56,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     thermal::register(m)?;
     svr::register(m)?;
     swarm::register(m)?;
+    grey::register(m)?;
     Ok(())
 }
 

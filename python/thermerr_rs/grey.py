@@ -1,0 +1,165 @@
+"""Seed 002 (Zhang & Yang 2011): rolling grey models GM(1,N) combined by a BP network, with GM
+alone and BP alone for comparison. Trained and evaluated in Rust."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import numpy as np
+
+from . import _core
+from ._arrays import F64, as_matrix, as_vector
+from .base import Estimator, _run_inputs
+from .errors import ModelFormatError, ParameterError
+
+#: the MSE goal on the normalised error of each trainer when ``goal=None``
+DEFAULT_GOAL = {"seed": 0.01, "adam": 1e-5}
+
+
+def _net_kw(est: Any) -> dict[str, Any]:
+    if est.trainer not in DEFAULT_GOAL:
+        raise ParameterError(f'trainer must be "seed" or "adam", got {est.trainer!r}')
+    return dict(
+        trainer=str(est.trainer), lr=float(est.lr), momentum=float(est.momentum),
+        max_epochs=int(est.max_epochs),
+        goal=float(DEFAULT_GOAL[est.trainer] if est.goal is None else est.goal),
+        patience=int(est.patience), seed=int(est.seed),
+    )
+
+
+class _Sequential(Estimator):
+    """A model of a time-ordered series whose prediction at step k uses the errors before k."""
+
+    _inner: Any
+
+    def predict(self, X: Any, y_measured: Any = None) -> F64:  # type: ignore[override]
+        """Closed loop (the model's own previous outputs fill the windows), or one step ahead
+        from the measured errors ``y_measured`` (the error of step k−1 enters at step k)."""
+        self._check_fitted()
+        x = as_matrix(X)
+        y = None if y_measured is None else as_vector(y_measured, n=x.shape[0])
+        out: F64 = self._inner.predict(x, y)
+        return out
+
+    def predict_run(self, run: Any, *, one_step: bool = False) -> F64:  # type: ignore[override]
+        """Predict a run closed loop, or one step ahead from its measured target column."""
+        self._check_fitted()
+        if not self.feature_names_in_:
+            raise ModelFormatError("this model does not record its feature columns; use predict(X)")
+        x = _run_inputs(run, self.feature_names_in_, self.inputs_)
+        if one_step:
+            if not self.target_name_:
+                raise ModelFormatError("this model does not record its target column")
+            return self.predict(x, run[self.target_name_])
+        return self.predict(x)
+
+    def _state(self) -> dict[str, Any]:
+        state: dict[str, Any] = json.loads(self._inner.to_json())
+        return state
+
+    @property
+    def history_(self) -> F64:
+        """Training MSE (normalised) after each epoch of the network."""
+        self._check_fitted()
+        h: F64 = self._inner.history
+        return h
+
+
+class GreyBP(_Sequential):
+    """Rolling GM(1,N) models over ``windows`` previous samples (6, 8 and 10 by default), each
+    refitted at every step, whose predictions — min–max normalised by their training ranges —
+    feed a BP network (``hidden`` sigmoid units, linear output) trained to the normalised error.
+
+    ``trainer="seed"`` is seed 002's batch gradient descent with momentum (lr 0.01, momentum 0.9,
+    ≤ 8000 epochs, MSE goal 0.01, initial weights uniform in [−1, 1]); ``"adam"`` trains the same
+    network with Adam until the MSE goal (1e-5 by default) or a 500-epoch plateau. Fit on a
+    time-ordered series; see :meth:`predict` for closed-loop and one-step-ahead prediction.
+    """
+
+    kind = "greybp"
+
+    def __init__(self, *, windows: tuple[int, ...] | list[int] = (6, 8, 10), hidden: int = 7,
+                 trainer: str = "adam", lr: float = 0.01, momentum: float = 0.9, max_epochs: int = 8000,
+                 goal: float | None = None, patience: int = 500, seed: int = 0) -> None:
+        self.windows = windows
+        self.hidden = hidden
+        self.trainer = trainer
+        self.lr = lr
+        self.momentum = momentum
+        self.max_epochs = max_epochs
+        self.goal = goal
+        self.patience = patience
+        self.seed = seed
+        self._inner: _core.GreyModel | None = None
+
+    def _fit(self, x: F64, y: F64) -> None:
+        self._inner = _core.GreyModel.fit(x, y, windows=[int(w) for w in self.windows], net=True,
+                                          hidden=int(self.hidden), **_net_kw(self))
+
+    def _restore(self, state: dict[str, Any]) -> None:
+        self._inner = _core.GreyModel.from_json(json.dumps(state))
+
+
+class GM1N(_Sequential):
+    """A rolling GM(1,N) alone: refitted on the ``window`` previous samples at every step, its
+    restored time response is the prediction (seed 002's "GM" baseline)."""
+
+    kind = "gm1n"
+
+    def __init__(self, *, window: int = 8) -> None:
+        self.window = window
+        self._inner: _core.GreyModel | None = None
+
+    def _fit(self, x: F64, y: F64) -> None:
+        self._inner = _core.GreyModel.fit(x, y, windows=[int(self.window)], net=False)
+
+    def _restore(self, state: dict[str, Any]) -> None:
+        self._inner = _core.GreyModel.from_json(json.dumps(state))
+
+    @property
+    def history_(self) -> F64:
+        return np.empty(0)
+
+
+class BPNetwork(Estimator):
+    """A BP network regressor on the temperatures (seed 002's "BP" baseline): inputs and error
+    min–max scaled by the training ranges, ``hidden`` sigmoid units (a list for several layers),
+    linear output; trainers as in :class:`GreyBP`."""
+
+    kind = "bp"
+
+    def __init__(self, *, hidden: int | list[int] = 7, trainer: str = "adam", lr: float = 0.01,
+                 momentum: float = 0.9, max_epochs: int = 8000, goal: float | None = None,
+                 patience: int = 500, seed: int = 0) -> None:
+        self.hidden = hidden
+        self.trainer = trainer
+        self.lr = lr
+        self.momentum = momentum
+        self.max_epochs = max_epochs
+        self.goal = goal
+        self.patience = patience
+        self.seed = seed
+        self._inner: _core.BpModel | None = None
+
+    def _fit(self, x: F64, y: F64) -> None:
+        hidden = [int(self.hidden)] if isinstance(self.hidden, (int, np.integer)) else [int(h) for h in self.hidden]
+        self._inner = _core.BpModel.fit(x, y, hidden=hidden, **_net_kw(self))
+
+    def _predict(self, x: F64) -> F64:
+        assert self._inner is not None
+        return self._inner.predict(x)
+
+    def _state(self) -> dict[str, Any]:
+        assert self._inner is not None
+        state: dict[str, Any] = json.loads(self._inner.to_json())
+        return state
+
+    def _restore(self, state: dict[str, Any]) -> None:
+        self._inner = _core.BpModel.from_json(json.dumps(state))
+
+    @property
+    def history_(self) -> F64:
+        self._check_fitted()
+        assert self._inner is not None
+        return self._inner.history
