@@ -12,6 +12,7 @@ pub mod error;
 #[cfg(feature = "fit")]
 pub mod fcm;
 pub mod grey;
+pub mod hybrid;
 #[cfg(feature = "fit")]
 pub mod kmeans;
 #[cfg(feature = "fit")]

@@ -1,0 +1,529 @@
+//! The hybrid LR/MA/AR filter + feed-forward network of seed 000 (Kang et al. 2007), and the
+//! variants it is compared with.
+//!
+//! Filters (all coefficients by least squares on the training runs):
+//! - LR: Ȳ1(n) = a0 + Σ_i a_i T_i(n)
+//! - MA: Ȳ2(n) = b0 + Σ_{j=1..J} Σ_i b_ji T_i(n−j)
+//! - AR: Ȳ3(n) = c0 + Σ_{k=1..K} c_k Ŷ(n−k) + c_LR Ȳ1(n) + c_MA Ȳ2(n)
+//!
+//! The network gets C_Y·[Ȳ1, Ȳ2, Ȳ3] (plus its biases), has a tanh hidden layer and a tanh output
+//! scaled by `limit` (seed 000: 30 hidden nodes, outputs within ±50 µm); it is trained on the
+//! error divided by `limit`. Ŷ(n−k) is the model's own final output at n−k: while training, the
+//! measured error stands in for it (series-parallel); while predicting, the model's previous
+//! outputs are fed back (closed loop) unless the caller gives the measured previous error (one
+//! step ahead). At the start of a run the missing lags take the first sample's temperatures and an
+//! error of 0 (errors are relative to the run's start); training skips those samples.
+//!
+//! Variants: `Hybrid` (the three filters + network), `Arma` (the AR filter alone), `LrNn` (the
+//! LR filter + network), `Fnn` (the network on C_Y·T, no filters).
+
+// index loops read like the filter formulas above
+#![allow(clippy::needless_range_loop)]
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::nn::Mlp;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Variant {
+    Hybrid,
+    Arma,
+    LrNn,
+    Fnn,
+}
+
+/// A fitted filter model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HybridModel {
+    pub variant: Variant,
+    pub n_temps: usize,
+    pub ma_lags: usize,
+    pub ar_lags: usize,
+    pub c_y: f64,
+    /// [a0, a_1..a_m]
+    pub lr: Vec<f64>,
+    /// [b0, b_{1,1..m}, …, b_{J,1..m}]
+    pub ma: Vec<f64>,
+    /// [c0, c_1..c_K, c_LR, c_MA]
+    pub ar: Vec<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub net: Option<Mlp>,
+}
+
+impl HybridModel {
+    pub fn n_features(&self) -> usize {
+        self.n_temps
+    }
+
+    fn n_net_inputs(&self) -> usize {
+        match self.variant {
+            Variant::Hybrid => 3,
+            Variant::LrNn => 1,
+            Variant::Fnn => self.n_temps,
+            Variant::Arma => 0,
+        }
+    }
+
+    /// Checks a model read from a file.
+    pub fn validate(&self) -> Result<()> {
+        let m = self.n_temps;
+        let bad = |s: String| Err(Error::Format(format!("hybrid model: {s}")));
+        if m == 0 || self.ma_lags == 0 {
+            return bad("needs temperatures and at least one MA lag".into());
+        }
+        if self.lr.len() != m + 1 || self.ma.len() != 1 + self.ma_lags * m {
+            return bad("LR or MA coefficient count does not match".into());
+        }
+        if self.ar.len() != 3 + self.ar_lags {
+            return bad("AR coefficient count does not match".into());
+        }
+        match (&self.net, self.variant) {
+            (None, Variant::Arma) => Ok(()),
+            (Some(net), v) if v != Variant::Arma => {
+                net.validate().map_err(Error::Format)?;
+                if net.n_inputs() != self.n_net_inputs() {
+                    return bad(format!(
+                        "the network takes {} inputs, the variant gives {}",
+                        net.n_inputs(),
+                        self.n_net_inputs()
+                    ));
+                }
+                Ok(())
+            }
+            _ => bad("network presence does not match the variant".into()),
+        }
+    }
+
+    /// The three filter outputs at one step, given the current temperatures, the J previous
+    /// temperature rows (most recent first) and the K previous outputs (most recent first).
+    fn filters(&self, t: &[f64], past_t: &[f64], past_y: &[f64]) -> [f64; 3] {
+        let m = self.n_temps;
+        let mut y1 = self.lr[0];
+        for i in 0..m {
+            y1 += self.lr[i + 1] * t[i];
+        }
+        let mut y2 = self.ma[0];
+        for j in 0..self.ma_lags {
+            for i in 0..m {
+                y2 += self.ma[1 + j * m + i] * past_t[j * m + i];
+            }
+        }
+        let mut y3 = self.ar[0];
+        for k in 0..self.ar_lags {
+            y3 += self.ar[1 + k] * past_y[k];
+        }
+        y3 += self.ar[1 + self.ar_lags] * y1 + self.ar[2 + self.ar_lags] * y2;
+        [y1, y2, y3]
+    }
+
+    /// The model's output from the filters (or the temperatures, for the FNN).
+    fn output(&self, t: &[f64], f: [f64; 3], scratch: &mut [f64]) -> f64 {
+        let Some(net) = &self.net else {
+            return f[2];
+        };
+        let k = self.n_net_inputs();
+        let (x, s) = scratch.split_at_mut(k);
+        match self.variant {
+            Variant::Hybrid => {
+                for j in 0..3 {
+                    x[j] = self.c_y * f[j];
+                }
+            }
+            Variant::LrNn => x[0] = self.c_y * f[0],
+            Variant::Fnn => {
+                for i in 0..k {
+                    x[i] = self.c_y * t[i];
+                }
+            }
+            Variant::Arma => {}
+        }
+        net.predict_one(x, s)
+    }
+
+    /// Predicts a run: closed loop, or one step ahead from the measured errors.
+    pub fn predict(&self, temps: &[f64], measured: Option<&[f64]>) -> Result<Vec<f64>> {
+        let m = self.n_temps;
+        if temps.len() % m != 0 {
+            return Err(Error::Shape(format!(
+                "the model takes {m} temperatures per sample"
+            )));
+        }
+        let n = temps.len() / m;
+        if measured.is_some_and(|y| y.len() != n) {
+            return Err(Error::Shape(format!(
+                "{n} samples but a different number of measured errors"
+            )));
+        }
+        let mut st = HybridState::new(self);
+        (0..n)
+            .map(|k| {
+                let prev = measured.filter(|_| k > 0).map(|y| y[k - 1]);
+                st.push(self, &temps[k * m..(k + 1) * m], prev)
+            })
+            .collect()
+    }
+}
+
+/// The streaming state over one run: the last J temperature rows and K outputs.
+#[derive(Clone, Debug)]
+pub struct HybridState {
+    m: usize,
+    past_t: Vec<f64>,
+    past_y: Vec<f64>,
+    started: bool,
+    last_out: f64,
+    scratch: Vec<f64>,
+}
+
+impl HybridState {
+    pub fn new(model: &HybridModel) -> Self {
+        let m = model.n_temps;
+        HybridState {
+            m,
+            past_t: vec![0.0; model.ma_lags * m],
+            past_y: vec![0.0; model.ar_lags],
+            started: false,
+            last_out: 0.0,
+            scratch: vec![
+                0.0;
+                model.n_net_inputs() + model.net.as_ref().map_or(0, |n| n.scratch_len())
+            ],
+        }
+    }
+
+    pub fn reset(&mut self) {
+        self.started = false;
+        self.last_out = 0.0;
+    }
+
+    /// The next sample's temperatures (and the measured error of the previous sample, if known);
+    /// returns this sample's predicted error. Allocates nothing.
+    pub fn push(
+        &mut self,
+        model: &HybridModel,
+        temps: &[f64],
+        measured_prev: Option<f64>,
+    ) -> Result<f64> {
+        let m = self.m;
+        if temps.len() != m {
+            return Err(Error::Shape(format!(
+                "the model takes {m} temperatures, got {}",
+                temps.len()
+            )));
+        }
+        if let Some(j) = temps.iter().position(|v| !v.is_finite()) {
+            return Err(Error::NonFinite {
+                what: "temperatures".into(),
+                row: 0,
+                col: j,
+            });
+        }
+        if measured_prev.is_some_and(|v| !v.is_finite()) {
+            return Err(Error::NonFinite {
+                what: "measured error".into(),
+                row: 0,
+                col: 0,
+            });
+        }
+        if !self.started {
+            // missing lags: the first sample's temperatures and an error of 0
+            for j in 0..model.ma_lags {
+                self.past_t[j * m..(j + 1) * m].copy_from_slice(temps);
+            }
+            self.past_y.iter_mut().for_each(|v| *v = 0.0);
+            self.started = true;
+        } else if let Some(y) = measured_prev {
+            // the previous output slot holds the model's own value: the measurement replaces it
+            if let Some(first) = self.past_y.first_mut() {
+                *first = y;
+            }
+        }
+        let f = model.filters(temps, &self.past_t, &self.past_y);
+        let out = model.output(temps, f, &mut self.scratch);
+        // shift the lags: this sample becomes the most recent
+        if model.ma_lags > 0 {
+            self.past_t.copy_within(..(model.ma_lags - 1) * m, m);
+            self.past_t[..m].copy_from_slice(temps);
+        }
+        if model.ar_lags > 0 {
+            self.past_y.copy_within(..model.ar_lags - 1, 1);
+            self.past_y[0] = out;
+        }
+        self.last_out = out;
+        Ok(out)
+    }
+}
+
+/// Hyper-parameters of a filter model.
+#[cfg(feature = "fit")]
+#[derive(Clone, Debug, PartialEq)]
+pub struct HybridParams {
+    pub variant: Variant,
+    pub ma_lags: usize,
+    pub ar_lags: usize,
+    pub c_y: f64,
+    /// Output limit of the network's tanh output, in the error's units.
+    pub limit: f64,
+    pub net: crate::nn::MlpParams,
+}
+
+#[cfg(feature = "fit")]
+impl HybridParams {
+    /// Fits on one or more runs stacked in `temps`/`y`; `starts` lists the first row of every run
+    /// after the first (lags never cross a run boundary).
+    pub fn fit(
+        &self,
+        temps: crate::samples::Samples<'_>,
+        y: &[f64],
+        starts: &[usize],
+    ) -> Result<(HybridModel, Vec<f64>)> {
+        use crate::linalg::lstsq;
+        temps.require_finite("X")?;
+        crate::samples::check_target(y, temps.nrows())?;
+        if self.ma_lags == 0 {
+            return Err(Error::param("ma_lags", "must be >= 1"));
+        }
+        if !(self.c_y.is_finite() && self.c_y > 0.0) {
+            return Err(Error::param(
+                "c_y",
+                format!("must be > 0, got {}", self.c_y),
+            ));
+        }
+        if !(self.limit.is_finite() && self.limit > 0.0) {
+            return Err(Error::param(
+                "limit",
+                format!("must be > 0, got {}", self.limit),
+            ));
+        }
+        let (n, m) = (temps.nrows(), temps.ncols());
+        let mut run_start = vec![0usize; n];
+        let mut bounds: Vec<usize> = starts.to_vec();
+        bounds.sort_unstable();
+        if bounds.iter().any(|&s| s == 0 || s >= n) {
+            return Err(Error::param(
+                "starts",
+                "run starts must lie inside the data",
+            ));
+        }
+        for k in 0..n {
+            run_start[k] = bounds.iter().rev().find(|&&s| s <= k).copied().unwrap_or(0);
+        }
+        let lag = self.ma_lags.max(self.ar_lags);
+        let rows: Vec<usize> = (0..n).filter(|&k| k - run_start[k] >= lag).collect();
+        if rows.len() < m * self.ma_lags + self.ar_lags + 4 {
+            return Err(Error::Shape(format!(
+                "{} usable samples are too few for {m} temperatures with {} MA and {} AR lags",
+                rows.len(),
+                self.ma_lags,
+                self.ar_lags
+            )));
+        }
+        let design = |cols: usize, f: &dyn Fn(usize, &mut [f64])| -> faer::Mat<f64> {
+            let mut a = faer::Mat::zeros(rows.len(), cols);
+            let mut buf = vec![0.0; cols];
+            for (r, &k) in rows.iter().enumerate() {
+                f(k, &mut buf);
+                for (c, v) in buf.iter().enumerate() {
+                    a[(r, c)] = *v;
+                }
+            }
+            a
+        };
+        let yt: Vec<f64> = rows.iter().map(|&k| y[k]).collect();
+        let lr = lstsq(
+            design(1 + m, &|k, b| {
+                b[0] = 1.0;
+                b[1..].copy_from_slice(temps.row(k));
+            })
+            .as_ref(),
+            &yt,
+        )?;
+        let jm = self.ma_lags * m;
+        let ma = lstsq(
+            design(1 + jm, &|k, b| {
+                b[0] = 1.0;
+                for j in 0..self.ma_lags {
+                    b[1 + j * m..1 + (j + 1) * m].copy_from_slice(temps.row(k - j - 1));
+                }
+            })
+            .as_ref(),
+            &yt,
+        )?;
+        let lr_out = |k: usize| lr[0] + (0..m).map(|i| lr[i + 1] * temps.get(k, i)).sum::<f64>();
+        let ma_out = |k: usize| {
+            let mut s = ma[0];
+            for j in 0..self.ma_lags {
+                for i in 0..m {
+                    s += ma[1 + j * m + i] * temps.get(k - j - 1, i);
+                }
+            }
+            s
+        };
+        let kk = self.ar_lags;
+        let ar = lstsq(
+            design(3 + kk, &|k, b| {
+                b[0] = 1.0;
+                for l in 0..kk {
+                    b[1 + l] = y[k - l - 1];
+                }
+                b[1 + kk] = lr_out(k);
+                b[2 + kk] = ma_out(k);
+            })
+            .as_ref(),
+            &yt,
+        )?;
+        let mut model = HybridModel {
+            variant: self.variant,
+            n_temps: m,
+            ma_lags: self.ma_lags,
+            ar_lags: kk,
+            c_y: self.c_y,
+            lr,
+            ma,
+            ar,
+            net: None,
+        };
+        let mut history = Vec::new();
+        if self.variant != Variant::Arma {
+            let k_in = model.n_net_inputs();
+            let mut xs = Vec::with_capacity(rows.len() * k_in);
+            let mut past_t = vec![0.0; jm];
+            let mut past_y = vec![0.0; kk];
+            for &k in &rows {
+                for j in 0..self.ma_lags {
+                    past_t[j * m..(j + 1) * m].copy_from_slice(temps.row(k - j - 1));
+                }
+                for l in 0..kk {
+                    past_y[l] = y[k - l - 1];
+                }
+                let f = model.filters(temps.row(k), &past_t, &past_y);
+                match self.variant {
+                    Variant::Hybrid => xs.extend(f.iter().map(|v| self.c_y * v)),
+                    Variant::LrNn => xs.push(self.c_y * f[0]),
+                    Variant::Fnn => xs.extend(temps.row(k).iter().map(|v| self.c_y * v)),
+                    Variant::Arma => {}
+                }
+            }
+            let targets: Vec<f64> = yt.iter().map(|v| v / self.limit).collect();
+            if let Some(v) = targets.iter().find(|v| v.abs() >= 1.0) {
+                return Err(Error::param(
+                    "limit",
+                    format!(
+                        "the error reaches {} but the network's output is limited to ±{}",
+                        v * self.limit,
+                        self.limit
+                    ),
+                ));
+            }
+            let np = crate::nn::MlpParams {
+                output_scale: 1.0,
+                ..self.net.clone()
+            };
+            let tr = np.fit(
+                crate::samples::Samples::new(&xs, rows.len(), k_in)?,
+                &targets,
+            )?;
+            let mut net = tr.net;
+            net.output_scale = self.limit;
+            history = tr.history;
+            model.net = Some(net);
+        }
+        Ok((model, history))
+    }
+}
+
+#[cfg(all(test, feature = "fit"))]
+mod tests {
+    use super::*;
+    use crate::nn::{Act, MlpParams, Trainer};
+
+    fn data(n: usize) -> (Vec<f64>, Vec<f64>) {
+        let t: Vec<f64> = (0..n)
+            .flat_map(|k| {
+                let s = k as f64 / 20.0;
+                [
+                    20.0 + 6.0 * (1.0 - (-s).exp()),
+                    20.0 + 3.0 * (s * 0.7).sin().abs(),
+                ]
+            })
+            .collect();
+        let mut y = vec![0.0; n];
+        for k in 1..n {
+            y[k] = 0.6 * y[k - 1] + 1.2 * (t[2 * k] - 20.0) + 0.8 * (t[2 * k - 1] - 20.0);
+        }
+        (t, y)
+    }
+
+    fn params(variant: Variant) -> HybridParams {
+        HybridParams {
+            variant,
+            ma_lags: 1,
+            ar_lags: 2,
+            c_y: 0.02,
+            limit: 50.0,
+            net: MlpParams {
+                hidden_sizes: vec![10],
+                hidden: Act::Tanh,
+                output: Act::Tanh,
+                output_scale: 1.0,
+                init: 0.5,
+                trainer: Trainer::Adam {
+                    lr: 0.01,
+                    max_epochs: 1500,
+                    goal: 1e-7,
+                    patience: 300,
+                },
+                seed: 2,
+            },
+        }
+    }
+
+    #[test]
+    fn streaming_equals_batch_for_every_variant() {
+        let (t, y) = data(120);
+        let s = crate::samples::Samples::new(&t, 120, 2).unwrap();
+        for v in [Variant::Hybrid, Variant::Arma, Variant::LrNn, Variant::Fnn] {
+            let (model, _) = params(v).fit(s, &y, &[]).unwrap();
+            model.validate().unwrap();
+            let closed = model.predict(&t, None).unwrap();
+            let one = model.predict(&t, Some(&y)).unwrap();
+            let mut st = HybridState::new(&model);
+            for k in 0..120 {
+                assert_eq!(
+                    st.push(&model, &t[2 * k..2 * k + 2], None).unwrap(),
+                    closed[k]
+                );
+            }
+            let back: HybridModel =
+                serde_json::from_str(&serde_json::to_string(&model).unwrap()).unwrap();
+            assert_eq!(back.predict(&t, Some(&y)).unwrap(), one);
+        }
+        // one step ahead, the ARMA filter follows this autoregressive process closely (its LR and
+        // MA outputs are least-squares fits, not the process's exact terms, so not exactly)
+        let (arma, _) = params(Variant::Arma).fit(s, &y, &[]).unwrap();
+        let one = arma.predict(&t, Some(&y)).unwrap();
+        let n = y.len() as f64;
+        let mean = y.iter().sum::<f64>() / n;
+        let sd = (y.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / n).sqrt();
+        let rms = (one[3..]
+            .iter()
+            .zip(&y[3..])
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            / (n - 3.0))
+            .sqrt();
+        assert!(rms < 0.05 * sd, "rms {rms} vs sd {sd}");
+    }
+
+    #[test]
+    fn refuses_errors_beyond_the_limit_and_bad_starts() {
+        let (t, y) = data(60);
+        let s = crate::samples::Samples::new(&t, 60, 2).unwrap();
+        let mut p = params(Variant::Hybrid);
+        p.limit = 1.0;
+        assert!(p.fit(s, &y, &[]).is_err());
+        assert!(params(Variant::Hybrid).fit(s, &y, &[60]).is_err());
+    }
+}
