@@ -21,6 +21,7 @@ from .errors import (
 )
 from .fcm import FuzzyCMeans
 from .grey import GM1N, BPNetwork, GreyBP
+from .hybrid import HybridFilterNet
 from .linear import MLR
 from .metrics import Scores, scores
 from .preprocessing import AGORegressor, MinMaxAGO, spread_search
@@ -53,6 +54,7 @@ __all__ = [
     "GreyBP",
     "GM1N",
     "BPNetwork",
+    "HybridFilterNet",
     "cso",
     "pso",
     "SwarmResult",

@@ -296,3 +296,38 @@ class BpModel:
     def from_json(text: str) -> BpModel: ...
 
 def gm1n_window(e: _F64, t: _F64, t_next: _F64) -> tuple[_F64, float]: ...
+
+# --- seed 000: hybrid filter + network ----------------------------------------------------------
+@final
+class HybridModel:
+    @staticmethod
+    def fit(
+        x: _F64,
+        y: _F64,
+        *,
+        starts: list[int] = ...,
+        variant: str = "hybrid",
+        ma_lags: int = 1,
+        ar_lags: int = 2,
+        c_y: float = 0.02,
+        limit: float = 50.0,
+        hidden: int = 30,
+        trainer: str = "adam",
+        lr: float = 0.01,
+        momentum: float = 0.9,
+        max_epochs: int = 10000,
+        goal: float = 0.0,
+        patience: int = 500,
+        init: float = 0.5,
+        seed: int = 0,
+    ) -> HybridModel: ...
+    def predict(self, x: _F64, y: _F64 | None = None) -> _F64: ...
+    @property
+    def filters(self) -> tuple[list[float], list[float], list[float]]: ...
+    @property
+    def history(self) -> _F64: ...
+    @property
+    def n_features(self) -> int: ...
+    def to_json(self) -> str: ...
+    @staticmethod
+    def from_json(text: str) -> HybridModel: ...

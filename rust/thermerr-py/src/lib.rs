@@ -4,6 +4,7 @@
 mod error;
 mod fcm;
 mod grey;
+mod hybrid;
 mod linear;
 mod rbf;
 mod run;
@@ -57,6 +58,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     svr::register(m)?;
     swarm::register(m)?;
     grey::register(m)?;
+    hybrid::register(m)?;
     Ok(())
 }
 

@@ -1,0 +1,94 @@
+"""Seed 000 (Kang et al. 2007): LR, MA and AR filters fitted by least squares, their outputs
+scaled by C_Y into a tanh network; with the ARMA, FNN and LR/NN variants for comparison."""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import numpy as np
+
+from . import _core
+from ._arrays import F64
+from .errors import ParameterError, ShapeError
+from .grey import _Sequential
+
+
+
+class HybridFilterNet(_Sequential):
+    """The hybrid filter + network of seed 000 and its comparison variants.
+
+    ``variant``: ``"hybrid"`` (LR, MA and AR filter outputs × ``c_y`` into a network),
+    ``"arma"`` (the AR filter alone: lagged errors plus the LR and MA outputs), ``"lrnn"`` (the LR
+    filter × ``c_y`` into a network), ``"fnn"`` (temperatures × ``c_y`` into a network).
+    ``ma_lags`` previous temperature rows feed the MA filter, ``ar_lags`` previous errors the AR
+    filter. The network has ``hidden`` tanh units and a tanh output scaled by ``limit`` (seed 000:
+    30 units, ±50 µm), initial weights uniform in [−0.5, 0.5]; ``trainer="seed"`` is batch gradient
+    descent with momentum for ``max_epochs`` (10 000) iterations, ``"adam"`` Adam until a
+    500-epoch plateau. Fit on one time-ordered run, or several with ``fit(X, y, starts=[...])``
+    (the first row of each run after the first); predict closed loop or one step ahead.
+    """
+
+    kind = "hybrid"
+
+    def __init__(self, *, variant: str = "hybrid", ma_lags: int = 1, ar_lags: int = 2, c_y: float = 0.02,
+                 limit: float = 50.0, hidden: int = 30, trainer: str = "adam", lr: float = 0.01,
+                 momentum: float = 0.9, max_epochs: int = 10000, patience: int = 500, seed: int = 0) -> None:
+        self.variant = variant
+        self.ma_lags = ma_lags
+        self.ar_lags = ar_lags
+        self.c_y = c_y
+        self.limit = limit
+        self.hidden = hidden
+        self.trainer = trainer
+        self.lr = lr
+        self.momentum = momentum
+        self.max_epochs = max_epochs
+        self.patience = patience
+        self.seed = seed
+        self._inner: _core.HybridModel | None = None
+        self._starts: list[int] = []
+
+    def fit(self, X: Any, y: Any, starts: list[int] | None = None) -> HybridFilterNet:  # type: ignore[override]
+        self._starts = [int(s) for s in (starts or [])]
+        super().fit(X, y)
+        return self
+
+    def _fit(self, x: F64, y: F64) -> None:
+        if self.trainer not in ("seed", "adam"):
+            raise ParameterError(f'trainer must be "seed" or "adam", got {self.trainer!r}')
+        self._inner = _core.HybridModel.fit(
+            x, y, starts=self._starts, variant=str(self.variant), ma_lags=int(self.ma_lags),
+            ar_lags=int(self.ar_lags), c_y=float(self.c_y), limit=float(self.limit), hidden=int(self.hidden),
+            trainer=str(self.trainer), lr=float(self.lr), momentum=float(self.momentum),
+            max_epochs=int(self.max_epochs), goal=0.0, patience=int(self.patience), seed=int(self.seed),
+        )
+
+    def fit_runs(self, runs: list[Any], target: str, features: list[str], *, inputs: str = "absolute") -> HybridFilterNet:
+        """Fit on several runs (their lags never cross from one run into the next)."""
+        from .base import _run_inputs
+
+        if not runs:
+            raise ShapeError("no runs to fit on")
+        xs = [_run_inputs(r, features, inputs) for r in runs]
+        ys = [r[target] for r in runs]
+        starts = list(np.cumsum([len(v) for v in ys])[:-1])
+        self.fit(np.vstack(xs), np.concatenate(ys), starts=[int(s) for s in starts])
+        self.feature_names_in_ = list(features)
+        self.target_name_ = target
+        self.inputs_ = inputs
+        return self
+
+    @property
+    def filters_(self) -> tuple[F64, F64, F64]:
+        """Coefficients of the LR ([a0, a_i]), MA ([b0, b_ji] lag-major) and AR
+        ([c0, c_1..c_K, c_LR, c_MA]) filters."""
+        self._check_fitted()
+        assert self._inner is not None
+        lr, ma, ar = self._inner.filters
+        return np.asarray(lr), np.asarray(ma), np.asarray(ar)
+
+    def _restore(self, state: dict[str, Any]) -> None:
+        self._inner = _core.HybridModel.from_json(json.dumps(state))
+
+
