@@ -1,6 +1,7 @@
 """Per-sample latency of the edge predictor (`thermerr-edge`, no Python) at seed sizes — 4 features;
-RBF with 50 centres, SVR with ~50 support vectors — against scikit-learn's `predict` on one sample
-(LinearRegression, SVR; RBF has no scikit-learn twin) and against our own Python API on one
+RBF with 50 centres, SVR with ~50 support vectors, BP 4-7-1, rolling GM(1,N) over 6/8/10 samples + 3-7-1 network,
+hybrid filters + 30-unit network — against scikit-learn's `predict` on one sample
+(LinearRegression, SVR, MLPRegressor of the BP's shape; the others have no scikit-learn twin) and against our own Python API on one
 sample. Edge latencies are measured inside the binary (`--bench-latency N`: a timer around each
 `predict_sample`); the Python ones around each call. The note gives the binary's size and peak
 resident memory.
@@ -61,8 +62,14 @@ def rows(sizes=SIZES, repeat: int = 3) -> list[dict]:
         "MLR": tr.MLR(),
         "RBF k=50": tr.RBFNetwork(design="kmeans", n_centers=50, spread=3.0, seed=0),
         "SVR": tr.SVR(C=10.0, epsilon=0.25, gamma=0.05),
+        "BP 4-7-1": tr.BPNetwork(hidden=7, seed=0),
+        "GM+BP (6,8,10)": tr.GreyBP(seed=0),
+        "hybrid 30 tanh": tr.HybridFilterNet(seed=0),
     }
-    refs = {"MLR": LinearRegression(), "SVR": SkSVR(C=10.0, epsilon=0.25, gamma=0.05)}
+    from sklearn.neural_network import MLPRegressor
+
+    refs = {"MLR": LinearRegression(), "SVR": SkSVR(C=10.0, epsilon=0.25, gamma=0.05),
+            "BP 4-7-1": MLPRegressor(hidden_layer_sizes=(7,), activation="logistic", max_iter=2000, random_state=0)}
     out = []
     with tempfile.TemporaryDirectory() as d:
         for name, m in ours.items():
@@ -72,6 +79,8 @@ def rows(sizes=SIZES, repeat: int = 3) -> list[dict]:
                                check=True, capture_output=True, text=True)
             e = json.loads(r.stdout)
             detail = f"{len(m.support_)} SV" if name == "SVR" else ""
+            # one row through the Python API (for the grey and filter models a one-row run, so this
+            # times the call, not a model with history)
             py50, py99 = per_call(m.predict, xt)
             if name in refs:
                 ref = refs[name].fit(x, y)

@@ -44,6 +44,14 @@ def models() -> dict[str, tuple[tr.Estimator, str]]:
         "mlr-ago-rise": (tr.AGORegressor(tr.MLR()), "rise"),
         "svr-rise": (tr.SVR(C=30.0, epsilon=0.05, gamma=0.05), "rise"),
         "svr-linear-minmax": (MinMaxScaled(tr.SVR(kernel="linear", C=10.0)), "absolute"),
+        "bp-rise": (tr.BPNetwork(max_epochs=800, seed=2), "rise"),
+        "greybp-rise": (tr.GreyBP(max_epochs=800, seed=2), "rise"),
+        "greybp-seed-absolute": (tr.GreyBP(trainer="seed", seed=2), "absolute"),
+        "gm1n-rise": (tr.GM1N(window=6), "rise"),
+        "hybrid-rise": (tr.HybridFilterNet(hidden=12, max_epochs=800, seed=2), "rise"),
+        "arma-rise": (tr.HybridFilterNet(variant="arma"), "rise"),
+        "fnn-minmax": (MinMaxScaled(tr.HybridFilterNet(variant="fnn", hidden=8, max_epochs=500)), "rise"),
+        "lrnn-rise": (tr.HybridFilterNet(variant="lrnn", hidden=8, max_epochs=500), "rise"),
     }
 
 
@@ -60,7 +68,7 @@ def test_edge_equals_library(name: str, edge_bin: Path, example_run1: Path, exam
     assert lines[0] == "time_s,E_z_pred"
     got = np.array([float(l.split(",")[1]) for l in lines[1:]])
     test = tr.read_run(example_run2)
-    want = model.predict_run(test)
+    want = model.predict_run(test)  # grey and filter models: closed loop, as the edge runs them
     assert got.shape == want.shape
     # the same predict code on bit-identical parameters (float_roundtrip JSON) and inputs, printed
     # as shortest round-trip decimals: 1e-9 relative (the bound) is far from binding

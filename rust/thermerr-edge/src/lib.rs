@@ -7,8 +7,9 @@
 //! `predict_one` of `thermerr-core` (built without its training code) that the Python library
 //! calls, so the edge and the library agree by construction.
 //!
-//! Models that depend on the past (inputs as rises since the first sample, 1-AGO preprocessing)
-//! keep their state in the [`Predictor`], in buffers sized when the model is loaded; call
+//! Kinds: `mlr`, `rbf`, `svr`, `bp`, `greybp`, `gm1n`, `hybrid`. Models that depend on the past
+//! (inputs as rises since the first sample, 1-AGO preprocessing, the grey and filter models' past
+//! errors) keep their state in the [`Predictor`], in buffers sized when the model is loaded; call
 //! [`Predictor::reset`] at the start of a new run.
 
 pub mod capi;
@@ -17,7 +18,10 @@ use std::path::Path;
 
 use serde::Deserialize;
 use serde_json::Value;
+use thermerr_core::grey::{GreyBpModel, GreyState};
+use thermerr_core::hybrid::{HybridModel, HybridState};
 use thermerr_core::linear::LinearRegression;
+use thermerr_core::nn::BpModel;
 use thermerr_core::rbf::RbfNetwork;
 use thermerr_core::svr::{Kernel, SvrModel};
 
@@ -87,11 +91,17 @@ pub enum Model {
     Mlr(LinearRegression),
     Rbf(RbfNetwork),
     Svr(SvrModel),
+    /// BP network on scaled temperatures (seed 002's baseline)
+    Bp(BpModel),
+    /// rolling GM(1,N) (+ BP network), seed 002; `kind` "greybp" or "gm1n"
+    Grey(GreyBpModel, &'static str),
+    /// LR/MA/AR filters (+ network), seed 000
+    Hybrid(HybridModel),
 }
 
 impl Model {
     /// The `kind` names this crate evaluates.
-    pub const KINDS: [&'static str; 3] = ["mlr", "rbf", "svr"];
+    pub const KINDS: [&'static str; 7] = ["mlr", "rbf", "svr", "bp", "greybp", "gm1n", "hybrid"];
 
     fn parse(kind: &str, model: Value) -> Result<Self> {
         let bad = |e: serde_json::Error| EdgeError::format(format!("{kind} model: {e}"));
@@ -99,6 +109,10 @@ impl Model {
             "mlr" => Model::Mlr(serde_json::from_value(model).map_err(bad)?),
             "rbf" => Model::Rbf(serde_json::from_value(model).map_err(bad)?),
             "svr" => Model::Svr(serde_json::from_value(model).map_err(bad)?),
+            "bp" => Model::Bp(serde_json::from_value(model).map_err(bad)?),
+            "greybp" => Model::Grey(serde_json::from_value(model).map_err(bad)?, "greybp"),
+            "gm1n" => Model::Grey(serde_json::from_value(model).map_err(bad)?, "gm1n"),
+            "hybrid" => Model::Hybrid(serde_json::from_value(model).map_err(bad)?),
             other => {
                 return Err(EdgeError::format(format!(
                     "unknown model kind {other:?} (this edge evaluates: {})",
@@ -142,6 +156,9 @@ impl Model {
             Model::Mlr(_) => "mlr",
             Model::Rbf(_) => "rbf",
             Model::Svr(_) => "svr",
+            Model::Bp(_) => "bp",
+            Model::Grey(_, k) => k,
+            Model::Hybrid(_) => "hybrid",
         }
     }
 
@@ -150,18 +167,68 @@ impl Model {
             Model::Mlr(m) => m.n_features(),
             Model::Rbf(m) => m.n_features(),
             Model::Svr(m) => m.n_features(),
+            Model::Bp(m) => m.n_features(),
+            Model::Grey(m, _) => m.n_features(),
+            Model::Hybrid(m) => m.n_features(),
         }
     }
 
-    /// One sample through the core's own `predict_one` (no allocation).
-    #[inline]
-    pub fn predict_one(&self, x: &[f64]) -> f64 {
-        match self {
-            Model::Mlr(m) => m.predict_one(x),
-            Model::Rbf(m) => m.predict_one(x),
-            Model::Svr(m) => m.predict_one(x),
+    /// Whether the model itself carries state from sample to sample (past errors).
+    pub fn sequential(&self) -> bool {
+        matches!(self, Model::Grey(..) | Model::Hybrid(_))
+    }
+}
+
+/// Per-run state and scratch space of a model, sized at load time.
+#[derive(Clone, Debug)]
+enum ModelState {
+    None,
+    Scratch(Vec<f64>),
+    Grey(Box<GreyState>),
+    Hybrid(Box<HybridState>),
+}
+
+impl ModelState {
+    fn new(m: &Model) -> Self {
+        match m {
+            Model::Bp(b) => ModelState::Scratch(vec![0.0; b.scratch_len()]),
+            Model::Grey(g, _) => ModelState::Grey(Box::new(GreyState::new(g))),
+            Model::Hybrid(h) => ModelState::Hybrid(Box::new(HybridState::new(h))),
+            _ => ModelState::None,
         }
     }
+
+    fn reset(&mut self) {
+        match self {
+            ModelState::Grey(s) => s.reset(),
+            ModelState::Hybrid(s) => s.reset(),
+            _ => {}
+        }
+    }
+}
+
+/// One sample through the core's own predict code (no allocation on success).
+#[inline]
+fn predict_model(
+    model: &Model,
+    state: &mut ModelState,
+    x: &[f64],
+    measured_prev: Option<f64>,
+) -> Result<f64> {
+    let input = |e: thermerr_core::Error| EdgeError::Input(e.to_string());
+    Ok(match (model, state) {
+        (Model::Mlr(m), _) => m.predict_one(x),
+        (Model::Rbf(m), _) => m.predict_one(x),
+        (Model::Svr(m), _) => m.predict_one(x),
+        (Model::Bp(m), ModelState::Scratch(s)) => m.predict_one(x, s),
+        (Model::Grey(m, _), ModelState::Grey(s)) => s.push(m, x, measured_prev).map_err(input)?,
+        (Model::Hybrid(m), ModelState::Hybrid(s)) => s.push(m, x, measured_prev).map_err(input)?,
+        _ => {
+            return Err(EdgeError::Input(
+                "model state does not match its kind".into(),
+            ))
+        }
+    })
 }
 
 /// Input scaling recorded in the model file.
@@ -196,6 +263,7 @@ pub struct Predictor {
     acc: Vec<f64>,
     y1_prev: f64,
     buf: Vec<f64>,
+    state: ModelState,
 }
 
 impl Predictor {
@@ -291,7 +359,9 @@ impl Predictor {
                 }
             }
         };
+        let state = ModelState::new(&model);
         Ok(Predictor {
+            state,
             model,
             pre,
             rise,
@@ -329,7 +399,7 @@ impl Predictor {
 
     /// Whether predictions depend on earlier samples of the run.
     pub fn stateful(&self) -> bool {
-        self.rise || matches!(self.pre, Pre::MinMaxAgo { .. })
+        self.rise || matches!(self.pre, Pre::MinMaxAgo { .. }) || self.model.sequential()
     }
 
     /// Forgets the run so far: the next sample starts a new run.
@@ -337,11 +407,23 @@ impl Predictor {
         self.have_first = false;
         self.acc.iter_mut().for_each(|v| *v = 0.0);
         self.y1_prev = 0.0;
+        self.state.reset();
     }
 
     /// Predicts the next sample of the run (one reading per feature, in the model's order).
-    /// Allocates nothing unless it fails.
+    /// Models that use past errors (grey, filter models) feed back their own previous output:
+    /// closed loop, as a compensating controller runs. Allocates nothing unless it fails.
     pub fn predict_sample(&mut self, x: &[f64]) -> Result<f64> {
+        self.predict_sample_measured(x, None)
+    }
+
+    /// As [`Predictor::predict_sample`], with the measured error of the previous sample when it
+    /// is known (one step ahead, for models that use past errors; ignored by the others).
+    pub fn predict_sample_measured(
+        &mut self,
+        x: &[f64],
+        measured_prev: Option<f64>,
+    ) -> Result<f64> {
         let n = self.buf.len();
         if x.len() != n {
             return Err(EdgeError::Input(format!(
@@ -366,13 +448,14 @@ impl Predictor {
                 x[j]
             };
         }
+        let (model, state) = (&self.model, &mut self.state);
         Ok(match &self.pre {
-            Pre::None => self.model.predict_one(&self.buf),
+            Pre::None => predict_model(model, state, &self.buf, measured_prev)?,
             Pre::MinMax { lo, span } => {
                 for ((b, l), s) in self.buf.iter_mut().zip(lo).zip(span) {
                     *b = (*b - l) / s;
                 }
-                self.model.predict_one(&self.buf)
+                predict_model(model, state, &self.buf, measured_prev)?
             }
             Pre::MinMaxAgo {
                 lo,
@@ -384,7 +467,7 @@ impl Predictor {
                     *a += (*b - l) / s;
                     *b = *a;
                 }
-                let y1 = self.model.predict_one(&self.buf);
+                let y1 = predict_model(model, state, &self.buf, measured_prev)?;
                 let y = (y1 - self.y1_prev) * y_span + y_lo;
                 self.y1_prev = y1;
                 y

@@ -27,11 +27,15 @@ fn expected() -> HashMap<String, Vec<f64>> {
         .unwrap()
 }
 
-const MODELS: [&str; 4] = [
+const MODELS: [&str; 8] = [
     "mlr_rise",
     "rbf_ols_minmax_rise",
     "rbf_exact_ago",
     "svr_rise",
+    "bp_rise",
+    "greybp_rise",
+    "gm1n_rise",
+    "hybrid_rise",
 ];
 
 #[test]
