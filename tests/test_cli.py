@@ -6,6 +6,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 
 import thermerr_rs as tr
@@ -74,3 +75,17 @@ def test_fit_svr_tuned_by_cso(tmp_path, capsys):
     capsys.readouterr()
     assert tr.load_model(tmp_path / "again.json").get_params() == model.get_params()
     assert report["train"]["rms"] < 1.0
+
+
+@pytest.mark.parametrize("model", ["greybp", "gm1n", "bp", "hybrid"])
+def test_fit_sequential_and_network_models(model, tmp_path, capsys):
+    from conftest import EXAMPLES
+
+    out = tmp_path / f"{model}.json"
+    argv = ["fit", str(EXAMPLES / "lathe_run.csv"), "--axis", "E_x", "--model", model, "--inputs", "absolute",
+            "--sensors", "T_coolant,T_headstock,T_x_nut,T_bed,T_ambient", "--out", str(out), "--json"]
+    assert main(argv) == 0
+    report = json.loads(capsys.readouterr().out)
+    m = tr.load_model(out)
+    assert m.kind == model and np.isfinite(report["train"]["rms"])
+    assert main(["evaluate", str(out), str(EXAMPLES / "lathe_run.csv"), "--json"]) == 0

@@ -1,6 +1,6 @@
 """The ``thermerr`` command line: one entry point, one subcommand per job.
 
-    thermerr fit RUN.csv --axis E_z --model mlr|rbf|svr [--tune cso|pso] [--sensors auto|T_a,T_b] --out MODEL.json
+    thermerr fit RUN.csv --axis E_z --model mlr|rbf|svr|greybp|gm1n|bp|hybrid [--tune cso|pso] [--sensors auto|T_a,T_b] --out MODEL.json
     thermerr evaluate MODEL.json RUN.csv
     thermerr select-sensors RUN.csv --axis E_z
     thermerr predict RUN.csv --machine M.toml --out PRED.csv
@@ -76,6 +76,20 @@ def _make_svr(args: argparse.Namespace, run: Run, sensors: list[str]) -> Estimat
 def _make_model(args: argparse.Namespace, n_train: int) -> Estimator:
     if args.model == "mlr":
         return MLR()
+    if args.model in ("greybp", "gm1n", "bp"):
+        from .grey import GM1N, BPNetwork, GreyBP
+
+        if args.model == "gm1n":
+            return GM1N(window=args.window)
+        if args.model == "bp":
+            return BPNetwork(hidden=args.hidden or 7, trainer=args.trainer, seed=args.seed)
+        return GreyBP(windows=tuple(args.windows), hidden=args.hidden or 7, trainer=args.trainer, seed=args.seed)
+    if args.model == "hybrid":
+        from .hybrid import HybridFilterNet
+
+        limit = args.limit if args.limit is not None else max(50.0, 1.5 * args._max_abs_error)
+        return HybridFilterNet(variant=args.variant, hidden=args.hidden or 30, trainer=args.trainer, seed=args.seed,
+                               limit=limit)
     from .rbf import RBFNetwork
 
     rbf = RBFNetwork(
@@ -100,6 +114,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     run = read_run(args.run, nan=args.nan)
     run[args.axis]
     sensors = _sensors(args, run)
+    args._max_abs_error = float(abs(run[args.axis]).max())
     if args.model == "svr":
         model = _make_svr(args, run, sensors)
     else:
@@ -230,7 +245,7 @@ def build_parser() -> argparse.ArgumentParser:
     f = sub.add_parser("fit", help="fit a thermal error model to a run and save it")
     f.add_argument("run", help="measured run CSV")
     f.add_argument("--axis", required=True, help="error column to model, e.g. E_z")
-    f.add_argument("--model", choices=["mlr", "rbf", "svr"], default="mlr")
+    f.add_argument("--model", choices=["mlr", "rbf", "svr", "greybp", "gm1n", "bp", "hybrid"], default="mlr")
     f.add_argument("--sensors", default="all", help="'all' (default), 'auto' (fuzzy c-means selection) or T_a,T_b,...")
     f.add_argument("--n-clusters", type=int, default=4, help="clusters for --sensors auto (default 4)")
     f.add_argument("--seed", type=int, default=0, help="seed of every stochastic step (default 0)")
@@ -248,6 +263,16 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--cv", type=int, default=5, help="folds of the --tune search (default 5)")
     f.add_argument("--pop", type=int, default=20, help="swarm population of --tune (default 20)")
     f.add_argument("--iters", type=int, default=100, help="swarm generations of --tune (default 100)")
+    f.add_argument("--windows", type=int, nargs="+", default=[6, 8, 10], help="GM(1,N) windows of greybp (default 6 8 10)")
+    f.add_argument("--window", type=int, default=8, help="GM(1,N) window of gm1n (default 8)")
+    f.add_argument("--hidden", type=int, default=None, help="hidden units of bp/greybp (7) or hybrid (30)")
+    f.add_argument("--trainer", choices=["adam", "seed"], default="adam",
+                   help="network trainer: adam (default) or the seed's gradient descent with momentum")
+    f.add_argument("--variant", choices=["hybrid", "arma", "lrnn", "fnn"], default="hybrid",
+                   help="seed 000 variant of --model hybrid (default hybrid)")
+    f.add_argument("--limit", type=float, default=None,
+                   help="output limit of --model hybrid in µm (default: 50, the seed's, or 1.5x the largest "
+                        "training error if that is larger)")
     f.add_argument("--inputs", choices=["rise", "absolute"], default="rise",
                    help="model from each sensor's rise since the run's start (default) or absolute readings")
     f.add_argument("--test", help="a held-out run to score the model on")
