@@ -2,7 +2,7 @@
 
     pip install ".[test]"            # release build of the extension + scikit-learn, scikit-fuzzy
     python benches/compare.py        # all families
-    python benches/compare.py mlr    # one family (mlr, fcm, rbf, svr, tune, thermal, edge)
+    python benches/compare.py mlr    # one family (mlr, fcm, rbf, svr, tune, nets, thermal, edge)
     python benches/compare.py --quick   # smaller sizes only
 
 ratio = reference time / our time (> 1: we are faster). Times are the best of a few runs, in s.
@@ -20,7 +20,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-FAMILIES = ["mlr", "fcm", "rbf", "svr", "tune", "thermal", "edge"]
+FAMILIES = ["mlr", "fcm", "rbf", "svr", "tune", "nets", "thermal", "edge"]
 
 
 def print_table(rows: list[dict]) -> None:
