@@ -22,4 +22,19 @@ echo "-- the same 4 sensors, multiple linear regression:"
 thermerr fit examples/hmc_run1.csv --axis E_z --model mlr --sensors auto --test examples/hmc_run2.csv --out out/mlr.json --quiet
 
 echo
-echo "Open out/diagnosis/report.html for the diagnosis; the models are in out/rbf.json and out/mlr.json."
+echo "== 3. Seed 004: an SVR tuned by chicken swarm optimisation (spindle at 3000 rpm, tested at 2000 rpm)"
+thermerr fit examples/spindle_3000rpm.csv --axis E_z --model svr --tune cso \
+    --sensors T_front_bearing,T_headstock,T_column,T_bed --test examples/spindle_2000rpm.csv --out out/svr.json
+
+echo
+echo "== 4. Which element's stiffness governs the axis? (key thermal stiffness, seed 001, on the MLR)"
+thermerr stiffness out/mlr.json examples/hmc_run1.csv
+
+echo
+echo "== 5. The SVR on the edge: the lean Rust predictor (no Python) streams the held-out run"
+cargo build --release -q -p thermerr-edge
+"$(cargo metadata --format-version 1 --no-deps | python -c 'import json,sys; print(json.load(sys.stdin)["target_directory"])')/release/thermerr-edge" \
+    out/svr.json examples/spindle_2000rpm.csv | head -5
+
+echo
+echo "Open out/diagnosis/report.html for the diagnosis; the models are in out/*.json."
