@@ -299,31 +299,10 @@ impl GreyBpModel {
 
     /// Predicts a whole series: closed loop, or one step ahead from `measured` errors.
     pub fn predict(&self, temps: &[f64], measured: Option<&[f64]>) -> Result<Vec<f64>> {
-        let m = self.n_temps;
-        if temps.len() % m != 0 {
-            return Err(Error::Shape(format!(
-                "the model takes {m} temperatures per sample"
-            )));
-        }
-        let n = temps.len() / m;
-        if let Some(y) = measured {
-            if y.len() != n {
-                return Err(Error::Shape(format!(
-                    "{n} samples but {} measured errors",
-                    y.len()
-                )));
-            }
-        }
         let mut st = GreyState::new(self);
-        (0..n)
-            .map(|k| {
-                let prev = match (measured, k) {
-                    (Some(y), k) if k > 0 => Some(y[k - 1]),
-                    _ => None,
-                };
-                st.push(self, &temps[k * m..(k + 1) * m], prev)
-            })
-            .collect()
+        crate::sequence::run_series(temps, self.n_temps, measured, |row, prev| {
+            st.push(self, row, prev)
+        })
     }
 }
 
@@ -380,26 +359,7 @@ impl GreyState {
         measured_prev: Option<f64>,
     ) -> Result<f64> {
         let m = self.m;
-        if temps.len() != m {
-            return Err(Error::Shape(format!(
-                "the model takes {m} temperatures, got {}",
-                temps.len()
-            )));
-        }
-        if let Some(j) = temps.iter().position(|v| !v.is_finite()) {
-            return Err(Error::NonFinite {
-                what: "temperatures".into(),
-                row: 0,
-                col: j,
-            });
-        }
-        if measured_prev.is_some_and(|v| !v.is_finite()) {
-            return Err(Error::NonFinite {
-                what: "measured error".into(),
-                row: 0,
-                col: 0,
-            });
-        }
+        crate::sequence::check_step(temps, m, measured_prev)?;
         // the previous sample's error joins the history
         if self.have_prev {
             let e_prev = measured_prev.unwrap_or(self.last_out);

@@ -144,25 +144,10 @@ impl HybridModel {
 
     /// Predicts a run: closed loop, or one step ahead from the measured errors.
     pub fn predict(&self, temps: &[f64], measured: Option<&[f64]>) -> Result<Vec<f64>> {
-        let m = self.n_temps;
-        if temps.len() % m != 0 {
-            return Err(Error::Shape(format!(
-                "the model takes {m} temperatures per sample"
-            )));
-        }
-        let n = temps.len() / m;
-        if measured.is_some_and(|y| y.len() != n) {
-            return Err(Error::Shape(format!(
-                "{n} samples but a different number of measured errors"
-            )));
-        }
         let mut st = HybridState::new(self);
-        (0..n)
-            .map(|k| {
-                let prev = measured.filter(|_| k > 0).map(|y| y[k - 1]);
-                st.push(self, &temps[k * m..(k + 1) * m], prev)
-            })
-            .collect()
+        crate::sequence::run_series(temps, self.n_temps, measured, |row, prev| {
+            st.push(self, row, prev)
+        })
     }
 }
 
@@ -207,26 +192,7 @@ impl HybridState {
         measured_prev: Option<f64>,
     ) -> Result<f64> {
         let m = self.m;
-        if temps.len() != m {
-            return Err(Error::Shape(format!(
-                "the model takes {m} temperatures, got {}",
-                temps.len()
-            )));
-        }
-        if let Some(j) = temps.iter().position(|v| !v.is_finite()) {
-            return Err(Error::NonFinite {
-                what: "temperatures".into(),
-                row: 0,
-                col: j,
-            });
-        }
-        if measured_prev.is_some_and(|v| !v.is_finite()) {
-            return Err(Error::NonFinite {
-                what: "measured error".into(),
-                row: 0,
-                col: 0,
-            });
-        }
+        crate::sequence::check_step(temps, m, measured_prev)?;
         if !self.started {
             // missing lags: the first sample's temperatures and an error of 0
             for j in 0..model.ma_lags {

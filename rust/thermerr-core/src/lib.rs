@@ -26,6 +26,7 @@ pub mod rbf;
 #[cfg(feature = "fit")]
 pub mod run;
 pub mod samples;
+pub mod sequence;
 pub mod svr;
 #[cfg(feature = "fit")]
 pub mod swarm;

@@ -130,18 +130,9 @@ impl PyGreyModel {
         x: PyReadonlyArray2<'py, f64>,
         y: Option<PyReadonlyArray1<'py, f64>>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let xs = samples(&x)?;
-        thermerr_core::linear::check_features(xs.ncols(), self.inner.n_features())
-            .map_err(PyErrWrap)?;
-        xs.require_finite("X").map_err(PyErrWrap)?;
-        let ys = match &y {
-            Some(a) => Some(slice1(a)?),
-            None => None,
-        };
-        let out = py
-            .detach(|| self.inner.predict(xs.as_slice(), ys))
-            .map_err(PyErrWrap)?;
-        Ok(vec_to_py(py, out))
+        crate::predict_series(py, &x, y.as_ref(), self.inner.n_features(), |t, m| {
+            self.inner.predict(t, m)
+        })
     }
 
     #[getter]

@@ -43,6 +43,26 @@ pub(crate) fn matrix_to_py(
     PyArray1::from_vec(py, m.data).reshape([r, c])
 }
 
+/// Runs a model that reads past errors over the rows of `x`: closed loop, or one step ahead from
+/// the measured errors `y`; the GIL is released while it runs.
+pub(crate) fn predict_series<'py>(
+    py: Python<'py>,
+    x: &PyReadonlyArray2<'py, f64>,
+    y: Option<&PyReadonlyArray1<'py, f64>>,
+    n_features: usize,
+    f: impl Fn(&[f64], Option<&[f64]>) -> thermerr_core::Result<Vec<f64>> + Sync,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let xs = samples(x)?;
+    thermerr_core::linear::check_features(xs.ncols(), n_features).map_err(PyErrWrap)?;
+    xs.require_finite("X").map_err(PyErrWrap)?;
+    let ys = match y {
+        Some(a) => Some(slice1(a)?),
+        None => None,
+    };
+    let out = py.detach(|| f(xs.as_slice(), ys)).map_err(PyErrWrap)?;
+    Ok(vec_to_py(py, out))
+}
+
 pub(crate) fn vec_to_py(py: Python<'_>, v: Vec<f64>) -> Bound<'_, PyArray1<f64>> {
     PyArray1::from_vec(py, v)
 }
