@@ -6,7 +6,8 @@ GM = a rolling GM(1,N) over the 8 previous samples; BP = a 5-7-1 network on the 
 GM+BP = rolling GM(1,N) over 6, 8 and 10 samples combined by a 3-7-1 network. Models that use past
 errors are shown one step ahead (the measured error of the previous sample enters, seed 002's
 protocol) and closed loop (their own previous output enters, as a compensating controller would
-run them). Trainers: "seed" = batch gradient descent with momentum (lr 0.01, momentum 0.9,
+run them); "persistence" (the previous measured error as the prediction) is the floor a one-step
+model has to beat. Trainers: "seed" = batch gradient descent with momentum (lr 0.01, momentum 0.9,
 ≤ 8000 epochs, MSE goal 0.01 on the normalised error), "adam" = Adam to an MSE goal of 1e-5 or a
 500-epoch plateau. Seed 0 for every network; MLR for reference.
 
@@ -40,6 +41,11 @@ def main() -> list[dict]:
     }
     rows = []
     print(f"{'model':<22} {'mode':<13} {'RMS µm':>8} {'max µm':>8} {'band µm':>8} {'train s':>8} {'epochs':>7}")
+    # the floor any one-step model must beat: the previous measured error as the prediction
+    yv = y[va_i]
+    s = tr.scores(yv, np.concatenate([[0.0], yv[:-1]]))
+    rows.append(dict(model="persistence", mode="one step", rms=s.rms, max=s.max_abs, band=s.band, train_s=0.0, epochs=0))
+    print(f"{'persistence':<22} {'one step':<13} {s.rms:>8.3f} {s.max_abs:>8.3f} {s.band:>8.3f} {0.0:>8.3f} {0:>7}")
     for name, m in models.items():
         t0 = time.perf_counter()
         m.fit(x[tr_i], y[tr_i])

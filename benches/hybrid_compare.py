@@ -147,6 +147,7 @@ def main() -> list[dict]:
     rng = np.random.default_rng(0)
     runs = {k: simulate(k, rng) for k in ("const1", "regular", "const2", "random")}
     variants = [("ARMA", "arma"), ("FNN", "fnn"), ("LR/NN", "lrnn"), ("hybrid", "hybrid")]
+    # one step ahead, the floor to beat is persistence: the previous measured error
     rows = []
     print(f"{'noise':>5} {'test':<15} " + " ".join(f"{n:>14}" for n, _ in variants) + "   seed 000 (ARMA FNN LR/NN hybrid)")
     for pct in (0, 2, 5, 10):
@@ -170,9 +171,14 @@ def main() -> list[dict]:
                     res[label + mode][name] = f"{s.rms:.2f}({s.max_abs:.2f})"
                     rows.append(dict(noise=pct, test=label + mode, model=name, rms=s.rms, max=s.max_abs,
                                      train_s=times[name]))
+        for label, key in (("constant 1-step", "const2"), ("random 1-step", "random")):
+            y = data[key][1]
+            s = tr.scores(y, np.concatenate([[0.0], y[:-1]]))
+            res[label]["persistence"] = f"{s.rms:.2f}({s.max_abs:.2f})"
         for label in ("constant", "random", "constant 1-step", "random 1-step"):
             print(f"{pct:>4}% {label:<15} " + " ".join(f"{res[label][n]:>14}" for n, _ in variants)
-                  + "   " + SEED.get((label, pct), "-"))
+                  + "   " + SEED.get((label, pct), "-")
+                  + (f"   persistence {res[label]['persistence']}" if "persistence" in res[label] else ""))
         print(f"{'':>5} {'train s':<15} " + " ".join(f"{times[n]:>14.2f}" for n, _ in variants))
     return rows
 
