@@ -9,7 +9,8 @@ alternating every 30 min) and a random case (levels drawn in the ranges every 20
 ambient swing 20 → 28 °C. Train on case 1 + regular, test on case 2 + random (closed loop, and
 one step ahead with the measured previous error in the AR lags), with 0/2/5/10 %
 white noise (of each signal's standard deviation) on the temperatures and the error. Inputs are
-the 5 structure temperatures and the ambient, the target the Z error in µm.
+the rises of the 5 structure temperatures and the ambient since each run's first sample, the
+target the Z error in µm.
 
     python benches/hybrid_compare.py
 """
@@ -136,6 +137,7 @@ def simulate(kind: str, rng: np.random.Generator) -> dict[str, np.ndarray]:
 
 def noisy(d: dict[str, np.ndarray], pct: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     x = np.column_stack([d[s] for s in SENSORS])
+    x = x - x[0]  # rises since the run's first sample (the runs start at different temperatures)
     y = d["E_z"].copy()
     if pct:
         x = x + rng.normal(size=x.shape) * (pct / 100.0) * np.maximum(x.std(axis=0), 1e-3)
