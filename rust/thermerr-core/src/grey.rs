@@ -25,7 +25,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::nn::Mlp;
+use crate::nn::{scale01, Mlp};
 
 /// Smallest number of past samples a window needs (two equations).
 pub const MIN_WINDOW: usize = 3;
@@ -284,12 +284,7 @@ impl GreyBpModel {
                 let k = gm.len();
                 let (x, s) = scratch.split_at_mut(k);
                 for (j, xv) in x.iter_mut().enumerate() {
-                    let span = self.gm_max[j] - self.gm_min[j];
-                    *xv = if span > 0.0 {
-                        (gm[j] - self.gm_min[j]) / span
-                    } else {
-                        0.5
-                    };
+                    *xv = scale01(gm[j], self.gm_min[j], self.gm_max[j]);
                 }
                 let out = net.predict_one(x, s);
                 out * (self.y_max - self.y_min) + self.y_min
@@ -500,21 +495,12 @@ impl GreyBpParams {
             let xs: Vec<f64> = feats
                 .chunks(k)
                 .flat_map(|r| {
-                    r.iter().enumerate().map(|(j, v)| {
-                        let span = model.gm_max[j] - model.gm_min[j];
-                        if span > 0.0 {
-                            (v - model.gm_min[j]) / span
-                        } else {
-                            0.5
-                        }
-                    })
+                    r.iter()
+                        .enumerate()
+                        .map(|(j, &v)| scale01(v, model.gm_min[j], model.gm_max[j]))
                 })
                 .collect();
-            let span = y_max - y_min;
-            let ys: Vec<f64> = targets
-                .iter()
-                .map(|v| if span > 0.0 { (v - y_min) / span } else { 0.5 })
-                .collect();
+            let ys: Vec<f64> = targets.iter().map(|&v| scale01(v, y_min, y_max)).collect();
             let tr = np.fit(crate::samples::Samples::new(&xs, ys.len(), k)?, &ys)?;
             history = tr.history;
             model.net = Some(tr.net);

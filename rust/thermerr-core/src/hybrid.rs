@@ -158,7 +158,6 @@ pub struct HybridState {
     past_t: Vec<f64>,
     past_y: Vec<f64>,
     started: bool,
-    last_out: f64,
     scratch: Vec<f64>,
 }
 
@@ -170,7 +169,6 @@ impl HybridState {
             past_t: vec![0.0; model.ma_lags * m],
             past_y: vec![0.0; model.ar_lags],
             started: false,
-            last_out: 0.0,
             scratch: vec![
                 0.0;
                 model.n_net_inputs() + model.net.as_ref().map_or(0, |n| n.scratch_len())
@@ -180,7 +178,6 @@ impl HybridState {
 
     pub fn reset(&mut self) {
         self.started = false;
-        self.last_out = 0.0;
     }
 
     /// The next sample's temperatures (and the measured error of the previous sample, if known);
@@ -217,7 +214,6 @@ impl HybridState {
             self.past_y.copy_within(..model.ar_lags - 1, 1);
             self.past_y[0] = out;
         }
-        self.last_out = out;
         Ok(out)
     }
 }

@@ -118,14 +118,16 @@ impl Mlp {
         }
         cur[0] * self.output_scale
     }
+}
 
-    /// Predicts every row of a row-major matrix with `n_inputs` columns.
-    pub fn predict_rows(&self, x: &[f64]) -> Result<Vec<f64>> {
-        let d = self.n_inputs();
-        let mut scratch = vec![0.0; self.scratch_len()];
-        Ok(x.chunks_exact(d)
-            .map(|r| self.predict_one(r, &mut scratch))
-            .collect())
+/// Min–max scaling to [0, 1] by a training range; a range of zero width maps to its middle, 0.5.
+#[inline]
+pub fn scale01(v: f64, lo: f64, hi: f64) -> f64 {
+    let span = hi - lo;
+    if span > 0.0 {
+        (v - lo) / span
+    } else {
+        0.5
     }
 }
 
@@ -317,7 +319,7 @@ impl MlpParams {
                         break;
                     }
                     for ((p, v), g) in params_mut(&mut net)
-                        .zip(flat_mut(&mut vel))
+                        .zip(params_mut(&mut vel))
                         .zip(flat(&grad))
                     {
                         *v = momentum * *v - lr * g;
@@ -357,8 +359,8 @@ impl MlpParams {
                     }
                     let (c1, c2) = (1.0 - b1.powi(t as i32), 1.0 - b2.powi(t as i32));
                     for (((p, mm), vv), g) in params_mut(&mut net)
-                        .zip(flat_mut(&mut m))
-                        .zip(flat_mut(&mut v))
+                        .zip(params_mut(&mut m))
+                        .zip(params_mut(&mut v))
                         .zip(flat(&grad))
                     {
                         *mm = b1 * *mm + (1.0 - b1) * g;
@@ -393,13 +395,12 @@ impl MlpParams {
         }
         let y_min = y.iter().copied().fold(f64::INFINITY, f64::min);
         let y_max = y.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-        let scale = |v: f64, lo: f64, hi: f64| if hi > lo { (v - lo) / (hi - lo) } else { 0.5 };
         let xs: Vec<f64> = x
             .rows()
             .flat_map(|r| (0..d).map(move |j| (j, r[j])))
-            .map(|(j, v)| scale(v, x_min[j], x_max[j]))
+            .map(|(j, v)| scale01(v, x_min[j], x_max[j]))
             .collect();
-        let ys: Vec<f64> = y.iter().map(|&v| scale(v, y_min, y_max)).collect();
+        let ys: Vec<f64> = y.iter().map(|&v| scale01(v, y_min, y_max)).collect();
         let t = self.fit(Samples::new(&xs, y.len(), d)?, &ys)?;
         let model = BpModel {
             x_min,
@@ -427,11 +428,6 @@ fn params_mut(net: &mut Mlp) -> impl Iterator<Item = &mut f64> {
         .iter_mut()
         .chain(net.biases.iter_mut())
         .flat_map(|v| v.iter_mut())
-}
-
-#[cfg(feature = "fit")]
-fn flat_mut(net: &mut Mlp) -> impl Iterator<Item = &mut f64> {
-    params_mut(net)
 }
 
 #[cfg(feature = "fit")]

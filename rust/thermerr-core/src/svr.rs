@@ -389,15 +389,14 @@ impl Cache {
     /// A buffer for row `i`, evicting the least recently used row if the budget is spent.
     fn take_slot(&mut self, l: usize) -> Vec<f32> {
         if self.free_rows == 0 {
+            // the budget is spent, so the LRU list is not empty: reuse its oldest row's buffer
             let old = self.next[self.head];
             self.unlink(old);
-            self.free_rows += 1;
             if let Some(v) = self.rows[old].take() {
-                self.free_rows -= 1;
                 return v;
             }
         }
-        self.free_rows -= 1;
+        self.free_rows = self.free_rows.saturating_sub(1);
         vec![0.0; l]
     }
 

@@ -166,6 +166,16 @@ pub fn cv_mse(x: Samples<'_>, y: &[f64], folds: &[Vec<usize>], p: &SvrParams) ->
 }
 
 impl TuneParams {
+    /// The fixed SVR parameters with this C and γ (RBF kernel).
+    pub fn svr_at(&self, c: f64, gamma: f64) -> SvrParams {
+        SvrParams {
+            c,
+            gamma: Gamma::Value(gamma),
+            kernel: KernelKind::Rbf,
+            ..self.svr.clone()
+        }
+    }
+
     fn decode(&self, v: &[f64]) -> (f64, f64) {
         match self.scale {
             Scale::Linear => (v[0], v[1]),
@@ -209,12 +219,6 @@ pub fn tune_svr(
     let bounds = params.bounds()?;
     let parts = split(x, y, folds);
     let d = x.ncols();
-    let svr_at = |c: f64, g: f64| SvrParams {
-        c,
-        gamma: Gamma::Value(g),
-        kernel: KernelKind::Rbf,
-        ..params.svr.clone()
-    };
     let mut generation = 0usize;
     let mut best = f64::INFINITY;
     let eval = |pop: &[Vec<f64>]| -> Result<Vec<f64>> {
@@ -223,7 +227,7 @@ pub fn tune_svr(
             .into_par_iter()
             .map(|t| {
                 let (c, g) = params.decode(&pop[t / nf]);
-                fold_mse(&parts[t % nf], d, &svr_at(c, g))
+                fold_mse(&parts[t % nf], d, &params.svr_at(c, g))
             })
             .collect();
         let out: Vec<f64> = per
@@ -245,7 +249,7 @@ pub fn tune_svr(
         ));
     }
     let (c, gamma) = params.decode(&res.x);
-    let model = svr_at(c, gamma).fit(x, y)?;
+    let model = params.svr_at(c, gamma).fit(x, y)?;
     Ok(TuneResult {
         c,
         gamma,
@@ -305,7 +309,7 @@ mod tests {
         let r = tune_svr(s, &y, &folds, &tp, |_, _| calls += 1).unwrap();
         assert_eq!(calls, 16); // the initial population, then 15 generations
         for (c, g) in [(0.01, 1e-3), (100.0, 10.0), (0.01, 10.0), (100.0, 1e-3)] {
-            let corner = cv_mse(s, &y, &folds, &tp.svr_at_for_test(c, g)).unwrap();
+            let corner = cv_mse(s, &y, &folds, &tp.svr_at(c, g)).unwrap();
             assert!(r.cv_mse < corner, "{} vs corner {corner}", r.cv_mse);
         }
         let again = tune_svr(s, &y, &folds, &tp, |_, _| {}).unwrap();
@@ -314,17 +318,7 @@ mod tests {
             (again.c, again.gamma, again.cv_mse)
         );
         // the reported CV error is the objective at the reported point
-        let direct = cv_mse(s, &y, &folds, &tp.svr_at_for_test(r.c, r.gamma)).unwrap();
+        let direct = cv_mse(s, &y, &folds, &tp.svr_at(r.c, r.gamma)).unwrap();
         assert!((direct - r.cv_mse).abs() <= 1e-12 * direct.max(1.0));
-    }
-
-    impl TuneParams {
-        fn svr_at_for_test(&self, c: f64, g: f64) -> SvrParams {
-            SvrParams {
-                c,
-                gamma: Gamma::Value(g),
-                ..self.svr.clone()
-            }
-        }
     }
 }
