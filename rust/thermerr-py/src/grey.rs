@@ -72,8 +72,8 @@ pub(crate) fn mlp_params(
 /// A fitted rolling GM(1,N) (+ BP) model.
 #[pyclass(frozen, module = "thermerr_rs._core", name = "GreyModel")]
 pub struct PyGreyModel {
-    inner: GreyBpModel,
-    history: Vec<f64>,
+    pub(crate) inner: GreyBpModel,
+    pub(crate) history: Vec<f64>,
 }
 
 #[pymethods]
@@ -149,20 +149,6 @@ impl PyGreyModel {
     fn n_features(&self) -> usize {
         self.inner.n_features()
     }
-
-    fn to_json(&self) -> PyResult<String> {
-        crate::to_json(&self.inner)
-    }
-
-    #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        let inner: GreyBpModel = crate::from_json(text)?;
-        inner.validate().map_err(PyErrWrap)?;
-        Ok(PyGreyModel {
-            inner,
-            history: Vec::new(),
-        })
-    }
 }
 
 /// GM(1,N) on one window: ([a, b2..bN], the restored prediction of the next sample).
@@ -196,8 +182,8 @@ fn gm1n_window<'py>(
 /// A fitted BP network regressor (min–max scaled inputs and output).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "BpModel")]
 pub struct PyBpModel {
-    inner: BpModel,
-    history: Vec<f64>,
+    pub(crate) inner: BpModel,
+    pub(crate) history: Vec<f64>,
 }
 
 #[pymethods]
@@ -246,20 +232,6 @@ impl PyBpModel {
     #[getter]
     fn n_features(&self) -> usize {
         self.inner.n_features()
-    }
-
-    fn to_json(&self) -> PyResult<String> {
-        crate::to_json(&self.inner)
-    }
-
-    #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        let inner: BpModel = crate::from_json(text)?;
-        inner.validate().map_err(|e| PyErrWrap(Error::Format(e)))?;
-        Ok(PyBpModel {
-            inner,
-            history: Vec::new(),
-        })
     }
 }
 

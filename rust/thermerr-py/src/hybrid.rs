@@ -11,8 +11,8 @@ use crate::{samples, slice1, vec_to_py, PyErrWrap};
 /// A fitted filter model (the Python `HybridFilterNet` holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "HybridModel")]
 pub struct PyHybridModel {
-    inner: HybridModel,
-    history: Vec<f64>,
+    pub(crate) inner: HybridModel,
+    pub(crate) history: Vec<f64>,
 }
 
 #[pymethods]
@@ -113,20 +113,6 @@ impl PyHybridModel {
     #[getter]
     fn n_features(&self) -> usize {
         self.inner.n_features()
-    }
-
-    fn to_json(&self) -> PyResult<String> {
-        crate::to_json(&self.inner)
-    }
-
-    #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        let inner: HybridModel = crate::from_json(text)?;
-        inner.validate().map_err(PyErrWrap)?;
-        Ok(PyHybridModel {
-            inner,
-            history: Vec::new(),
-        })
     }
 }
 
