@@ -42,7 +42,7 @@ def saved(tmp_path):
     [
         (lambda d: d.update(format_version=99), "format_version 99"),
         (lambda d: d.update(kind="quantum"), "unknown model kind 'quantum'"),
-        (lambda d: d.pop("model"), "missing field 'model'"),
+        (lambda d: d.pop("model"), "missing field .model."),
         (lambda d: d["model"].pop("coef"), "coef"),
         (lambda d: d.update(preprocessing={"kind": "fft"}), "unknown preprocessing"),
     ],

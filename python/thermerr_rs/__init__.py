@@ -24,7 +24,7 @@ from .grey import GM1N, BPNetwork, GreyBP
 from .hybrid import HybridFilterNet
 from .linear import MLR
 from .metrics import Scores, scores
-from .preprocessing import AGORegressor, MinMaxAGO, spread_search
+from .preprocessing import AGORegressor, MinMaxAGO, MinMaxScaled, spread_search
 from .rbf import RBFNetwork
 from .run import Run, read_run
 from .selection import SensorSelection, select_sensors
@@ -48,6 +48,7 @@ __all__ = [
     "select_sensors",
     "RBFNetwork",
     "MinMaxAGO",
+    "MinMaxScaled",
     "AGORegressor",
     "spread_search",
     "SVR",

@@ -11,16 +11,18 @@ from typing import Any, ClassVar, TypeVar
 
 import numpy as np
 
+from . import _core
 from ._arrays import F64, as_matrix, as_vector
 from ._io import write_atomic
 from .errors import ModelFormatError, NotFittedError, ParameterError
 
-#: Schema version of the model files this library writes and reads.
-FORMAT_VERSION = 1
+#: Schema version of the model files this library writes and reads (the core's).
+FORMAT_VERSION: int = _core.FORMAT_VERSION
 
 _REGISTRY: dict[str, type[Estimator]] = {}
 #: meta-estimators that wrap a model with input preprocessing, by the ``preprocessing.kind``
-#: they write into the model file (the file stays the inner model's, so the edge reads it too)
+#: they write into the model file (the file stays the inner model's, so the edge reads it too);
+#: filled when their classes are defined, like ``_REGISTRY``
 _WRAPPERS: dict[str, Any] = {}
 
 E = TypeVar("E", bound="Estimator")
@@ -43,6 +45,9 @@ class Estimator:
         super().__init_subclass__(**kw)
         if cls.kind:
             _REGISTRY[cls.kind] = cls
+        pre = cls.__dict__.get("preprocessing_kind")
+        if pre:
+            _WRAPPERS[pre] = cls
 
     # -- parameters ---------------------------------------------------------------------
     @classmethod
@@ -121,41 +126,49 @@ class Estimator:
     def _predict(self, x: F64) -> F64:
         raise NotImplementedError
 
-    def _state(self) -> dict[str, Any]:
-        """JSON-able fitted state (the ``model`` field of the file)."""
-        raise NotImplementedError
-
-    def _restore(self, state: dict[str, Any]) -> None:
-        raise NotImplementedError
-
-    # -- model files ----------------------------------------------------------------------
-    def to_dict(self) -> dict[str, Any]:
+    def _fitted(self) -> Any:
+        """The binding object holding the fitted core model (what the file's ``model`` is)."""
         self._check_fitted()
+        return self._inner
+
+    def _restore(self, fitted: Any) -> None:
+        """Takes the fitted binding object read from a model file."""
+        self._inner = fitted
+
+    # -- model files: written and read by the core (thermerr_core::artifact) ---------------
+    def _file_kind(self) -> str:
+        return self.kind
+
+    def _header(self) -> dict[str, Any]:
+        """Everything in the file around the fitted model, its kind and feature count."""
         from . import __version__
 
         return {
-            "format_version": FORMAT_VERSION,
-            "kind": self.kind,
             "library": f"thermerr_rs {__version__}",
             "params": _jsonable(self.get_params()),
-            "n_features": int(self.n_features_in_),
             "features": self.feature_names_in_,
             "target": self.target_name_,
             "inputs": self.inputs_,
             "preprocessing": None,
-            "model": self._state(),
         }
 
     def to_json(self) -> str:
-        return json.dumps(self.to_dict(), indent=1, allow_nan=False)
+        """The model file's text; the core validates the model before it writes it."""
+        self._check_fitted()
+        try:
+            header = json.dumps(self._header(), allow_nan=False)
+        except (TypeError, ValueError) as e:
+            raise ModelFormatError(f"cannot save the parameters of this model: {e}") from None
+        text: str = _core.write_model(self._file_kind(), header, self._fitted())
+        return text
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = json.loads(self.to_json())
+        return out
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the model as versioned JSON, atomically."""
-        try:
-            text = self.to_json()
-        except ValueError as e:  # allow_nan=False
-            raise ModelFormatError(f"cannot save a model holding non-finite numbers: {e}") from None
-        return write_atomic(path, text)
+        return write_atomic(path, self.to_json())
 
     @classmethod
     def from_dict(cls, doc: dict[str, Any]) -> Estimator:
@@ -168,7 +181,7 @@ class Estimator:
 
     def __setstate__(self, st: dict[str, Any]) -> None:
         if "json" in st:
-            other = _from_dict(json.loads(st["json"]), expect=type(self))
+            other = _from_text(st["json"], expect=type(self))
             self.__dict__.update(other.__dict__)
         else:
             type(self).__init__(self, **st["params"])
@@ -204,41 +217,40 @@ def _jsonable(v: Any) -> Any:
 def _from_dict(doc: Any, expect: type[Estimator] | None = None) -> Estimator:
     if not isinstance(doc, dict):
         raise ModelFormatError("a model file holds a JSON object")
-    for field in ("format_version", "kind", "params", "n_features", "model"):
-        if field not in doc:
-            raise ModelFormatError(f"missing field {field!r}")
-    if doc["format_version"] != FORMAT_VERSION:
-        raise ModelFormatError(
-            f"format_version {doc['format_version']!r} is not supported (this library reads {FORMAT_VERSION})"
-        )
-    kind = doc["kind"]
+    try:
+        text = json.dumps(doc, allow_nan=False)
+    except (TypeError, ValueError) as e:
+        raise ModelFormatError(f"not a model file: {e}") from None
+    return _from_text(text, expect)
+
+
+def _from_text(text: str, expect: type[Estimator] | None = None) -> Estimator:
+    """The estimator of a model file's text: the core reads and validates the whole file and
+    hands back the fitted model; this picks the estimator class of its ``kind``."""
+    kind, n_features, header_json, fitted = _core.read_model(text)
+    header = json.loads(header_json)
     cls = _REGISTRY.get(kind)
     if cls is None:
         raise ModelFormatError(f"unknown model kind {kind!r} (known: {sorted(_REGISTRY)})")
-    if (
-        expect is not None
-        and expect is not Estimator
-        and not issubclass(cls, expect)
-        and doc.get("preprocessing") is None
-    ):
-        raise ModelFormatError(f"the file holds a {kind!r} model, not a {expect.kind!r}")
+    pre = header.get("preprocessing")
+    if expect is not None and expect is not Estimator and not issubclass(cls, expect):
+        wrapper = _WRAPPERS.get(pre["kind"]) if pre else None
+        if wrapper is None or not issubclass(wrapper, expect):
+            raise ModelFormatError(f"the file holds a {kind!r} model, not a {expect.kind or expect.__name__!r}")
     try:
-        est = cls(**doc["params"])
-        est._restore(doc["model"])
-    except (TypeError, KeyError) as e:
-        raise ModelFormatError(f"{kind} model: bad or missing field: {e}") from None
-    est.n_features_in_ = int(doc["n_features"])
-    est.feature_names_in_ = doc.get("features")
-    est.target_name_ = doc.get("target")
-    est.inputs_ = doc.get("inputs", "absolute")
-    if est.inputs_ not in ("absolute", "rise"):
-        raise ModelFormatError(f"unknown inputs {est.inputs_!r}")
-    pre = doc.get("preprocessing")
-    if pre is None:
+        est = cls(**header["params"])
+    except TypeError as e:
+        raise ModelFormatError(f"{kind} model: bad parameters: {e}") from None
+    est._restore(fitted)
+    est.n_features_in_ = n_features
+    est.feature_names_in_ = header.get("features")
+    est.target_name_ = header.get("target")
+    est.inputs_ = header.get("inputs", "absolute")
+    if not pre:
         return est
-    if not isinstance(pre, dict) or pre.get("kind") not in _WRAPPERS:
-        raise ModelFormatError(f"unknown preprocessing {pre!r} (known: {sorted(_WRAPPERS)})")
-    wrapped: Estimator = _WRAPPERS[pre["kind"]]._wrap_restored(est, pre)
+    wrapped: Estimator = _WRAPPERS[pre["kind"]]._wrap_restored(
+        est, _core.Preprocessing.from_json(json.dumps(pre), n_features)
+    )
     return wrapped
 
 
@@ -252,10 +264,6 @@ def load_model(path: str | os.PathLike[str]) -> Estimator:
     except UnicodeDecodeError:
         raise ModelFormatError(f"{p}: not UTF-8 text") from None
     try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise ModelFormatError(f"{p}: not JSON ({e})") from None
-    try:
-        return _from_dict(doc)
+        return _from_text(text)
     except ModelFormatError as e:
         raise ModelFormatError(f"{p}: {e}") from None

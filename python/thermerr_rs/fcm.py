@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import numpy as np
@@ -158,9 +157,4 @@ class FuzzyCMeans(Estimator):
             p["init"] = p["init"].tolist()
         return p
 
-    def _state(self) -> dict[str, Any]:
-        state: dict[str, Any] = json.loads(self._model().to_json())
-        return state
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.FcmModel.from_json(json.dumps(state))

@@ -3,7 +3,6 @@ alone and BP alone for comparison. Trained and evaluated in Rust."""
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import numpy as np
@@ -54,9 +53,6 @@ class _Sequential(Estimator):
             return self.predict(x, run[self.target_name_])
         return self.predict(x)
 
-    def _state(self) -> dict[str, Any]:
-        state: dict[str, Any] = json.loads(self._inner.to_json())
-        return state
 
     @property
     def history_(self) -> F64:
@@ -97,8 +93,6 @@ class GreyBP(_Sequential):
         self._inner = _core.GreyModel.fit(x, y, windows=[int(w) for w in self.windows], net=True,
                                           hidden=int(self.hidden), **_net_kw(self))
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.GreyModel.from_json(json.dumps(state))
 
 
 class GM1N(_Sequential):
@@ -114,8 +108,6 @@ class GM1N(_Sequential):
     def _fit(self, x: F64, y: F64) -> None:
         self._inner = _core.GreyModel.fit(x, y, windows=[int(self.window)], net=False)
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.GreyModel.from_json(json.dumps(state))
 
     @property
     def history_(self) -> F64:
@@ -150,13 +142,7 @@ class BPNetwork(Estimator):
         assert self._inner is not None
         return self._inner.predict(x)
 
-    def _state(self) -> dict[str, Any]:
-        assert self._inner is not None
-        state: dict[str, Any] = json.loads(self._inner.to_json())
-        return state
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.BpModel.from_json(json.dumps(state))
 
     @property
     def history_(self) -> F64:

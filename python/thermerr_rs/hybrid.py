@@ -3,7 +3,6 @@ scaled by C_Y into a tanh network; with the ARMA, FNN and LR/NN variants for com
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import numpy as np
@@ -88,7 +87,5 @@ class HybridFilterNet(_Sequential):
         lr, ma, ar = self._inner.filters
         return np.asarray(lr), np.asarray(ma), np.asarray(ar)
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.HybridModel.from_json(json.dumps(state))
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 from . import _core
@@ -42,10 +41,4 @@ class MLR(Estimator):
         assert self._inner is not None
         return self._inner.intercept
 
-    def _state(self) -> dict[str, Any]:
-        assert self._inner is not None
-        state: dict[str, Any] = json.loads(self._inner.to_json())
-        return state
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.MlrModel.from_json(json.dumps(state))

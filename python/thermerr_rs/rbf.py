@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 from . import _core
@@ -82,10 +81,4 @@ class RBFNetwork(Estimator):
     sse_history_ = property(lambda self: self._get("sse_history"))
     n_neurons_ = property(lambda self: int(self._get("centers").shape[0]))
 
-    def _state(self) -> dict[str, Any]:
-        assert self._inner is not None
-        state: dict[str, Any] = json.loads(self._inner.to_json())
-        return state
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.RbfModel.from_json(json.dumps(state))

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import numpy as np
@@ -101,9 +100,4 @@ class SVR(Estimator):
     def gamma_(self) -> float | None:
         return self._model().gamma
 
-    def _state(self) -> dict[str, Any]:
-        state: dict[str, Any] = json.loads(self._model().to_json())
-        return state
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.SvrModel.from_json(json.dumps(state))

@@ -316,7 +316,7 @@ impl Model {
                     )));
                 }
                 return Err(format_err(format!(
-                    "unknown model kind {other:?} (known: {})",
+                    "unknown model kind '{other}' (known: {})",
                     Self::KINDS.join(", ")
                 )));
             }
@@ -432,8 +432,24 @@ struct RawFile {
     #[serde(default)]
     inputs: Option<String>,
     #[serde(default)]
-    preprocessing: Option<Preprocessing>,
+    preprocessing: Option<Value>,
     model: Value,
+}
+
+fn read_preprocessing(v: Option<Value>) -> Result<Option<Preprocessing>> {
+    let v = match v {
+        None | Some(Value::Null) => return Ok(None),
+        Some(v) => v,
+    };
+    let kind = v.get("kind").and_then(Value::as_str).unwrap_or("");
+    if !matches!(kind, "minmax" | "minmax_ago") {
+        return Err(format_err(format!(
+            "unknown preprocessing {v} (known kinds: minmax, minmax_ago)"
+        )));
+    }
+    serde_json::from_value(v)
+        .map(Some)
+        .map_err(|e| format_err(format!("preprocessing: {e}")))
 }
 
 /// Reads the envelope of a model file of any kind: checks the version and the inputs, and hands
@@ -441,7 +457,13 @@ struct RawFile {
 /// [`Model::from_value`]) reads the rest; then [`Header::validate`] checks the header against
 /// the model's feature count.
 pub fn read_envelope(text: &str) -> Result<(String, usize, Header, Value)> {
-    let raw: RawFile = serde_json::from_str(text).map_err(|e| format_err(e.to_string()))?;
+    let raw: RawFile = serde_json::from_str(text).map_err(|e| {
+        if e.is_syntax() || e.is_eof() {
+            format_err(format!("not JSON ({e})"))
+        } else {
+            format_err(e.to_string())
+        }
+    })?;
     if raw.format_version.as_u64() != Some(FORMAT_VERSION) {
         return Err(format_err(format!(
             "format_version {} is not supported (this version reads {FORMAT_VERSION})",
@@ -464,7 +486,7 @@ pub fn read_envelope(text: &str) -> Result<(String, usize, Header, Value)> {
         features: raw.features,
         target: raw.target,
         inputs,
-        preprocessing: raw.preprocessing,
+        preprocessing: read_preprocessing(raw.preprocessing)?,
     };
     Ok((raw.kind, n, header, raw.model))
 }
