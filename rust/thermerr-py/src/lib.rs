@@ -6,6 +6,7 @@ mod fcm;
 mod grey;
 mod hybrid;
 mod linear;
+mod params;
 mod rbf;
 mod run;
 mod svr;
@@ -79,6 +80,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     swarm::register(m)?;
     grey::register(m)?;
     hybrid::register(m)?;
+    params::register(m)?;
     Ok(())
 }
 
