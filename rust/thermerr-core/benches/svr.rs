@@ -27,12 +27,12 @@ fn bench(c: &mut Criterion) {
     for (n, d, cc) in [(60usize, 4usize, 7.3465), (2000, 10, 10.0)] {
         let (x, y) = data(n, d);
         let s = Samples::new(&x, n, d).unwrap();
-        let p = SvrParams {
-            c: cc,
-            epsilon: 0.05,
-            gamma: Gamma::Value(1.0 / d as f64),
-            ..Default::default()
-        };
+        let p = SvrParams::new()
+            .c(cc)
+            .epsilon(0.05)
+            .gamma(Gamma::Value(1.0 / d as f64))
+            .check()
+            .unwrap();
         let mut g = c.benchmark_group(format!("svr_fit_{n}x{d}"));
         if n > 1000 {
             g.sample_size(10);
@@ -41,14 +41,14 @@ fn bench(c: &mut Criterion) {
         g.finish();
     }
     let (x, y) = data(60, 4);
-    let m = SvrParams {
-        c: 7.3465,
-        epsilon: 0.01,
-        gamma: Gamma::Value(0.5),
-        ..Default::default()
-    }
-    .fit(Samples::new(&x, 60, 4).unwrap(), &y)
-    .unwrap();
+    let m = SvrParams::new()
+        .c(7.3465)
+        .epsilon(0.01)
+        .gamma(Gamma::Value(0.5))
+        .check()
+        .unwrap()
+        .fit(Samples::new(&x, 60, 4).unwrap(), &y)
+        .unwrap();
     let q = [0.1, -0.2, 0.3, 0.05];
     c.bench_function(
         &format!("svr_predict_one_{}sv_4f", m.dual_coef.len()),

@@ -94,3 +94,42 @@ impl Error {
         }
     }
 }
+
+/// The value of a parameter enum named `s` in `names` (its `FromStr`), or an
+/// [`Error::InvalidParam`] listing the names allowed: `must be "a", "b" or "c", got "x"`.
+pub(crate) fn parse_name<T: Copy>(param: &'static str, s: &str, names: &[(&str, T)]) -> Result<T> {
+    if let Some((_, v)) = names.iter().find(|(n, _)| *n == s) {
+        return Ok(*v);
+    }
+    let quoted: Vec<String> = names.iter().map(|(n, _)| format!("{n:?}")).collect();
+    let list = match quoted.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => quoted.concat(),
+    };
+    Err(Error::param(param, format!("must be {list}, got {s:?}")))
+}
+
+/// Asserts that every name of a parameter enum parses (`FromStr`) and deserialises (serde) to
+/// the same value, and that serde writes it back under the first name given for it.
+#[cfg(test)]
+pub(crate) fn assert_names_agree<T>(names: &[(&str, T)])
+where
+    T: std::str::FromStr<Err = Error>
+        + serde::Serialize
+        + serde::de::DeserializeOwned
+        + PartialEq
+        + std::fmt::Debug
+        + Copy,
+{
+    for (n, v) in names {
+        assert_eq!(n.parse::<T>().unwrap(), *v, "{n}");
+        let de: T = serde_json::from_str(&format!("{n:?}")).unwrap();
+        assert_eq!(de, *v, "{n}");
+        let first = names.iter().find(|(_, w)| w == v).unwrap().0;
+        assert_eq!(serde_json::to_string(v).unwrap(), format!("{first:?}"));
+    }
+    assert!(matches!(
+        "no such name".parse::<T>(),
+        Err(Error::InvalidParam { .. })
+    ));
+}

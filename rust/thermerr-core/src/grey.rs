@@ -25,7 +25,9 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::nn::{scale01, Mlp};
+use crate::nn::{scale01, BpParams, BpValidParams, Mlp};
+#[cfg(feature = "fit")]
+use crate::samples::Samples;
 
 /// Smallest number of past samples a window needs (two equations).
 pub const MIN_WINDOW: usize = 3;
@@ -231,6 +233,10 @@ pub struct GreyBpModel {
     /// absent for a GM alone
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub net: Option<Mlp>,
+    /// Training MSE (normalised) of the network after each epoch; empty for a GM alone and in
+    /// files written before it was kept.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub history: Vec<f64>,
 }
 
 impl GreyBpModel {
@@ -417,110 +423,202 @@ impl GreyState {
     }
 }
 
-/// Hyper-parameters of the rolling GM + BP model.
-#[cfg(feature = "fit")]
+/// Hyper-parameters of the rolling GM + BP model; a consuming builder with seed 002's windows
+/// and network, checked by [`GreyBpParams::check`].
 #[derive(Clone, Debug, PartialEq)]
-pub struct GreyBpParams {
+pub struct GreyBpParams(GreyBpValidParams);
+
+/// Checked hyper-parameters; [`GreyBpValidParams::fit`] fits the windows and trains the network.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GreyBpValidParams {
+    /// Lengths of the GM(1,N) windows, each at least [`MIN_WINDOW`].
     pub windows: Vec<usize>,
-    /// `None`: the first window's GM alone, no network.
-    pub net: Option<crate::nn::MlpParams>,
+    /// The network that combines the windows' predictions.
+    pub net: BpValidParams,
+}
+
+impl Default for GreyBpParams {
+    /// Windows of 6, 8 and 10 samples; the network of [`BpParams::default`].
+    fn default() -> Self {
+        GreyBpParams(GreyBpValidParams {
+            windows: vec![6, 8, 10],
+            net: BpParams::default().0,
+        })
+    }
+}
+
+impl GreyBpParams {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn windows(mut self, windows: Vec<usize>) -> Self {
+        self.0.windows = windows;
+        self
+    }
+
+    /// Adjusts the network, starting from this model's: `.net(|n| n.trainer(Trainer::Gd))`.
+    pub fn net(mut self, f: impl FnOnce(BpParams) -> BpParams) -> Self {
+        self.0.net = f(BpParams(self.0.net)).0;
+        self
+    }
+
+    /// Validates everything that does not depend on the data.
+    pub fn check(self) -> Result<GreyBpValidParams> {
+        let GreyBpValidParams { windows, net } = self.0;
+        check_windows(&windows)?;
+        Ok(GreyBpValidParams {
+            windows,
+            net: BpParams(net).check()?,
+        })
+    }
+}
+
+/// Hyper-parameters of a rolling GM(1,N) alone (seed 002's "GM"); checked by
+/// [`Gm1nParams::check`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Gm1nParams(Gm1nValidParams);
+
+/// Checked hyper-parameters; [`Gm1nValidParams::fit`] gives a [`GreyBpModel`] without network.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Gm1nValidParams {
+    /// Length of the window, at least [`MIN_WINDOW`].
+    pub window: usize,
+}
+
+impl Default for Gm1nParams {
+    /// A window of 8 samples.
+    fn default() -> Self {
+        Gm1nParams(Gm1nValidParams { window: 8 })
+    }
+}
+
+impl Gm1nParams {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn window(mut self, window: usize) -> Self {
+        self.0.window = window;
+        self
+    }
+
+    pub fn check(self) -> Result<Gm1nValidParams> {
+        check_windows(&[self.0.window])?;
+        Ok(self.0)
+    }
+}
+
+fn check_windows(windows: &[usize]) -> Result<()> {
+    if windows.is_empty() || windows.iter().any(|&w| w < MIN_WINDOW) {
+        return Err(Error::param(
+            "windows",
+            format!("need window lengths >= {MIN_WINDOW}, got {windows:?}"),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(feature = "fit")]
-impl GreyBpParams {
+impl GreyBpValidParams {
     /// Fits on a time-ordered training series: `temps` (n × m), `y` the measured errors. The
     /// network learns from the steps k ≥ max(windows), where every window is full.
-    pub fn fit(
-        &self,
-        temps: crate::samples::Samples<'_>,
-        y: &[f64],
-    ) -> Result<(GreyBpModel, Vec<f64>)> {
-        temps.require_finite("X")?;
-        crate::samples::check_target(y, temps.nrows())?;
-        if self.windows.is_empty() || self.windows.iter().any(|&w| w < MIN_WINDOW) {
-            return Err(Error::param(
-                "windows",
-                format!(
-                    "need window lengths >= {MIN_WINDOW}, got {:?}",
-                    self.windows
-                ),
-            ));
-        }
-        let (n, m) = (temps.nrows(), temps.ncols());
-        let w_max = *self.windows.iter().max().unwrap_or(&MIN_WINDOW);
-        if n < w_max + 5 {
-            return Err(Error::Shape(format!(
-                "{n} samples are too few: the longest window is {w_max}, and at least 5 more are needed to train on"
-            )));
-        }
-        let mut work = GmWork::new(w_max, m);
-        let k = self.windows.len();
-        let mut feats = Vec::with_capacity((n - w_max) * k);
-        let mut targets = Vec::with_capacity(n - w_max);
-        for step in w_max..n {
-            let mut row = Vec::with_capacity(k);
-            for &w in &self.windows {
-                let s = step - w;
-                match work.predict_next(
-                    &y[s..step],
-                    &temps.as_slice()[s * m..step * m],
-                    temps.row(step),
-                ) {
-                    Some(v) => row.push(v),
-                    None => break,
-                }
-            }
-            if row.len() == k {
-                feats.extend(row);
-                targets.push(y[step]);
-            }
-        }
-        if targets.len() < 5 {
-            return Err(Error::Numerical(
-                "the GM(1,N) windows are singular on this data (constant readings?)".into(),
-            ));
-        }
-        let range = |v: &mut dyn Iterator<Item = f64>| {
-            v.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-                (lo.min(x), hi.max(x))
-            })
-        };
-        let mut gm_min = vec![0.0; k];
-        let mut gm_max = vec![0.0; k];
-        for j in 0..k {
-            let (lo, hi) = range(&mut feats.iter().skip(j).step_by(k).copied());
-            gm_min[j] = lo;
-            gm_max[j] = hi;
-        }
-        let (y_min, y_max) = range(&mut targets.iter().copied());
-        let mut model = GreyBpModel {
-            windows: self.windows.clone(),
-            n_temps: m,
-            gm_min,
-            gm_max,
-            y_min,
-            y_max,
-            net: None,
-        };
-        let mut history = Vec::new();
-        if let Some(np) = &self.net {
-            let xs: Vec<f64> = feats
-                .chunks(k)
-                .flat_map(|r| {
-                    r.iter()
-                        .enumerate()
-                        .map(|(j, &v)| scale01(v, model.gm_min[j], model.gm_max[j]))
-                })
-                .collect();
-            let ys: Vec<f64> = targets.iter().map(|&v| scale01(v, y_min, y_max)).collect();
-            let tr = np.fit(crate::samples::Samples::new(&xs, ys.len(), k)?, &ys)?;
-            history = tr.history;
-            model.net = Some(tr.net);
-        } else if k != 1 {
-            return Err(Error::param("windows", "GM alone takes one window"));
-        }
-        Ok((model, history))
+    pub fn fit(&self, temps: Samples<'_>, y: &[f64]) -> Result<GreyBpModel> {
+        fit_rolling(&self.windows, Some(&self.net), temps, y)
     }
+}
+
+#[cfg(feature = "fit")]
+impl Gm1nValidParams {
+    /// Fits on a time-ordered training series: `temps` (n × m), `y` the measured errors.
+    pub fn fit(&self, temps: Samples<'_>, y: &[f64]) -> Result<GreyBpModel> {
+        fit_rolling(&[self.window], None, temps, y)
+    }
+}
+
+/// The GM(1,N) predictions of every window over the training series, their ranges, and (with
+/// `net`) the network trained on them.
+#[cfg(feature = "fit")]
+fn fit_rolling(
+    windows: &[usize],
+    net: Option<&BpValidParams>,
+    temps: Samples<'_>,
+    y: &[f64],
+) -> Result<GreyBpModel> {
+    temps.require_finite("X")?;
+    crate::samples::check_target(y, temps.nrows())?;
+    let (n, m) = (temps.nrows(), temps.ncols());
+    let w_max = *windows.iter().max().unwrap_or(&MIN_WINDOW);
+    if n < w_max + 5 {
+        return Err(Error::Shape(format!(
+            "{n} samples are too few: the longest window is {w_max}, and at least 5 more are needed to train on"
+        )));
+    }
+    let mut work = GmWork::new(w_max, m);
+    let k = windows.len();
+    let mut feats = Vec::with_capacity((n - w_max) * k);
+    let mut targets = Vec::with_capacity(n - w_max);
+    for step in w_max..n {
+        let mut row = Vec::with_capacity(k);
+        for &w in windows {
+            let s = step - w;
+            match work.predict_next(
+                &y[s..step],
+                &temps.as_slice()[s * m..step * m],
+                temps.row(step),
+            ) {
+                Some(v) => row.push(v),
+                None => break,
+            }
+        }
+        if row.len() == k {
+            feats.extend(row);
+            targets.push(y[step]);
+        }
+    }
+    if targets.len() < 5 {
+        return Err(Error::Numerical(
+            "the GM(1,N) windows are singular on this data (constant readings?)".into(),
+        ));
+    }
+    let range = |v: &mut dyn Iterator<Item = f64>| {
+        v.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        })
+    };
+    let mut gm_min = vec![0.0; k];
+    let mut gm_max = vec![0.0; k];
+    for j in 0..k {
+        let (lo, hi) = range(&mut feats.iter().skip(j).step_by(k).copied());
+        gm_min[j] = lo;
+        gm_max[j] = hi;
+    }
+    let (y_min, y_max) = range(&mut targets.iter().copied());
+    let mut model = GreyBpModel {
+        windows: windows.to_vec(),
+        n_temps: m,
+        gm_min,
+        gm_max,
+        y_min,
+        y_max,
+        net: None,
+        history: Vec::new(),
+    };
+    if let Some(np) = net {
+        let xs: Vec<f64> = feats
+            .chunks(k)
+            .flat_map(|r| {
+                r.iter()
+                    .enumerate()
+                    .map(|(j, &v)| scale01(v, model.gm_min[j], model.gm_max[j]))
+            })
+            .collect();
+        let ys: Vec<f64> = targets.iter().map(|&v| scale01(v, y_min, y_max)).collect();
+        let tr = np.train(Samples::new(&xs, ys.len(), k)?, &ys)?;
+        model.history = tr.history;
+        model.net = Some(tr.net);
+    }
+    Ok(model)
 }
 
 #[cfg(all(test, feature = "fit"))]
@@ -567,25 +665,22 @@ mod tests {
             .chunks(2)
             .map(|r| 3.0 * (r[0] - 20.0) + 1.5 * (r[1] - 20.0))
             .collect();
-        let p = GreyBpParams {
-            windows: vec![6, 8],
-            net: Some(crate::nn::MlpParams {
-                hidden_sizes: vec![5],
-                hidden: crate::nn::Act::Sigmoid,
-                output: crate::nn::Act::Linear,
-                output_scale: 1.0,
-                init: 1.0,
-                trainer: crate::nn::Trainer::Adam {
-                    lr: 0.01,
-                    max_epochs: 2000,
-                    goal: 1e-5,
-                    patience: 200,
-                },
-                seed: 1,
-            }),
-        };
-        let s = crate::samples::Samples::new(&t, n, m).unwrap();
-        let (model, _) = p.fit(s, &y).unwrap();
+        let p = GreyBpParams::new()
+            .windows(vec![6, 8])
+            .net(|n| {
+                n.hidden_sizes(vec![5])
+                    .init(1.0)
+                    .trainer(crate::nn::Trainer::Adam)
+                    .lr(0.01)
+                    .max_epochs(2000)
+                    .goal(Some(1e-5))
+                    .patience(200)
+                    .seed(1)
+            })
+            .check()
+            .unwrap();
+        let s = Samples::new(&t, n, m).unwrap();
+        let model = p.fit(s, &y).unwrap();
         let one = model.predict(&t, Some(&y)).unwrap();
         let closed = model.predict(&t, None).unwrap();
         // one step ahead on smooth data follows the measured error closely
@@ -606,5 +701,32 @@ mod tests {
         let json = serde_json::to_string(&model).unwrap();
         let back: GreyBpModel = serde_json::from_str(&json).unwrap();
         assert_eq!(back.predict(&t, None).unwrap(), closed);
+        assert!(!back.history.is_empty());
+        assert_eq!(back.history, model.history);
+        // GM alone: one window, no network, no history written
+        let gm = Gm1nParams::new().check().unwrap().fit(s, &y).unwrap();
+        assert_eq!((gm.windows.clone(), gm.net.is_none()), (vec![8], true));
+        assert!(!serde_json::to_string(&gm).unwrap().contains("history"));
+    }
+
+    #[test]
+    fn bad_params_are_refused() {
+        assert!(GreyBpParams::new().windows(vec![2, 8]).check().is_err());
+        assert!(GreyBpParams::new().windows(vec![]).check().is_err());
+        assert!(GreyBpParams::new().net(|n| n.lr(-1.0)).check().is_err());
+        assert!(Gm1nParams::new().window(2).check().is_err());
+        let d = GreyBpParams::new().check().unwrap();
+        assert_eq!(d.windows, vec![6, 8, 10]);
+        assert_eq!(d.net.trainer, crate::nn::Trainer::Adam);
+    }
+
+    #[test]
+    fn autotraits() {
+        fn is_send_sync<T: Send + Sync>() {}
+        is_send_sync::<GreyBpParams>();
+        is_send_sync::<GreyBpValidParams>();
+        is_send_sync::<Gm1nParams>();
+        is_send_sync::<Gm1nValidParams>();
+        is_send_sync::<GreyBpModel>();
     }
 }

@@ -22,9 +22,12 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result};
-use crate::nn::Mlp;
+use std::str::FromStr;
 
+use crate::error::{parse_name, Error, Result};
+use crate::nn::{Act, BpParams, BpValidParams, Mlp};
+
+/// Which filters feed the network (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Variant {
@@ -32,6 +35,22 @@ pub enum Variant {
     Arma,
     LrNn,
     Fnn,
+}
+
+impl Variant {
+    const NAMES: [(&'static str, Variant); 4] = [
+        ("hybrid", Variant::Hybrid),
+        ("arma", Variant::Arma),
+        ("lrnn", Variant::LrNn),
+        ("fnn", Variant::Fnn),
+    ];
+}
+
+impl FromStr for Variant {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        parse_name("variant", s, &Self::NAMES)
+    }
 }
 
 /// A fitted filter model.
@@ -50,6 +69,10 @@ pub struct HybridModel {
     pub ar: Vec<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub net: Option<Mlp>,
+    /// Training MSE (of the error / limit) of the network after each epoch; empty for the ARMA
+    /// filter and in files written before it was kept.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub history: Vec<f64>,
 }
 
 impl HybridModel {
@@ -233,21 +256,112 @@ impl HybridState {
     }
 }
 
-/// Hyper-parameters of a filter model.
-#[cfg(feature = "fit")]
+/// Hyper-parameters of a filter model; a consuming builder with seed 000's defaults, checked by
+/// [`HybridParams::check`].
 #[derive(Clone, Debug, PartialEq)]
-pub struct HybridParams {
+pub struct HybridParams(HybridValidParams);
+
+/// Checked hyper-parameters; [`HybridValidParams::fit`] fits the filters and the network.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct HybridValidParams {
     pub variant: Variant,
     pub ma_lags: usize,
     pub ar_lags: usize,
     pub c_y: f64,
     /// Output limit of the network's tanh output, in the error's units.
     pub limit: f64,
-    pub net: crate::nn::MlpParams,
+    /// The network (its `output_scale` is replaced by `limit`).
+    pub net: BpValidParams,
+}
+
+impl Default for HybridParams {
+    /// The hybrid variant with 1 MA and 2 AR lags, C_Y = 0.02, outputs within ±50; a network of
+    /// 30 tanh units with a tanh output, initial weights in [−0.5, 0.5], trained by Adam (lr 0.01)
+    /// for at most 10 000 epochs with an MSE goal of 0, patience 500, seed 0.
+    fn default() -> Self {
+        let net = BpParams::new()
+            .hidden_sizes(vec![30])
+            .hidden_activation(Act::Tanh)
+            .output_activation(Act::Tanh)
+            .init(0.5)
+            .max_epochs(10_000)
+            .goal(Some(0.0));
+        HybridParams(HybridValidParams {
+            variant: Variant::Hybrid,
+            ma_lags: 1,
+            ar_lags: 2,
+            c_y: 0.02,
+            limit: 50.0,
+            net: net.0,
+        })
+    }
+}
+
+impl HybridParams {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn variant(mut self, variant: Variant) -> Self {
+        self.0.variant = variant;
+        self
+    }
+
+    /// Previous temperature rows of the MA filter, >= 1.
+    pub fn ma_lags(mut self, ma_lags: usize) -> Self {
+        self.0.ma_lags = ma_lags;
+        self
+    }
+
+    /// Previous errors of the AR filter.
+    pub fn ar_lags(mut self, ar_lags: usize) -> Self {
+        self.0.ar_lags = ar_lags;
+        self
+    }
+
+    /// Scale of the network's inputs, > 0.
+    pub fn c_y(mut self, c_y: f64) -> Self {
+        self.0.c_y = c_y;
+        self
+    }
+
+    /// Limit of the network's output in the error's units, > 0.
+    pub fn limit(mut self, limit: f64) -> Self {
+        self.0.limit = limit;
+        self
+    }
+
+    /// Adjusts the network, starting from this model's: `.net(|n| n.hidden_sizes(vec![8]))`.
+    pub fn net(mut self, f: impl FnOnce(BpParams) -> BpParams) -> Self {
+        self.0.net = f(BpParams(self.0.net)).0;
+        self
+    }
+
+    /// Validates everything that does not depend on the data (the network's parameters only
+    /// when the variant has a network).
+    pub fn check(self) -> Result<HybridValidParams> {
+        let mut p = self.0;
+        if p.ma_lags == 0 {
+            return Err(Error::param("ma_lags", "must be >= 1"));
+        }
+        if !(p.c_y.is_finite() && p.c_y > 0.0) {
+            return Err(Error::param("c_y", format!("must be > 0, got {}", p.c_y)));
+        }
+        if !(p.limit.is_finite() && p.limit > 0.0) {
+            return Err(Error::param(
+                "limit",
+                format!("must be > 0, got {}", p.limit),
+            ));
+        }
+        if p.variant != Variant::Arma {
+            p.net = BpParams(p.net).output_scale(1.0).check()?;
+        }
+        Ok(p)
+    }
 }
 
 #[cfg(feature = "fit")]
-impl HybridParams {
+impl HybridValidParams {
     /// Fits on one or more runs stacked in `temps`/`y`; `starts` lists the first row of every run
     /// after the first (lags never cross a run boundary).
     pub fn fit(
@@ -255,25 +369,10 @@ impl HybridParams {
         temps: crate::samples::Samples<'_>,
         y: &[f64],
         starts: &[usize],
-    ) -> Result<(HybridModel, Vec<f64>)> {
+    ) -> Result<HybridModel> {
         use crate::linalg::lstsq;
         temps.require_finite("X")?;
         crate::samples::check_target(y, temps.nrows())?;
-        if self.ma_lags == 0 {
-            return Err(Error::param("ma_lags", "must be >= 1"));
-        }
-        if !(self.c_y.is_finite() && self.c_y > 0.0) {
-            return Err(Error::param(
-                "c_y",
-                format!("must be > 0, got {}", self.c_y),
-            ));
-        }
-        if !(self.limit.is_finite() && self.limit > 0.0) {
-            return Err(Error::param(
-                "limit",
-                format!("must be > 0, got {}", self.limit),
-            ));
-        }
         let (n, m) = (temps.nrows(), temps.ncols());
         let mut run_start = vec![0usize; n];
         let mut bounds: Vec<usize> = starts.to_vec();
@@ -361,8 +460,8 @@ impl HybridParams {
             ma,
             ar,
             net: None,
+            history: Vec::new(),
         };
-        let mut history = Vec::new();
         if self.variant != Variant::Arma {
             let k_in = model.n_net_inputs();
             let mut xs = Vec::with_capacity(rows.len() * k_in);
@@ -394,27 +493,23 @@ impl HybridParams {
                     ),
                 ));
             }
-            let np = crate::nn::MlpParams {
-                output_scale: 1.0,
-                ..self.net.clone()
-            };
-            let tr = np.fit(
+            let tr = self.net.train(
                 crate::samples::Samples::new(&xs, rows.len(), k_in)?,
                 &targets,
             )?;
             let mut net = tr.net;
             net.output_scale = self.limit;
-            history = tr.history;
+            model.history = tr.history;
             model.net = Some(net);
         }
-        Ok((model, history))
+        Ok(model)
     }
 }
 
 #[cfg(all(test, feature = "fit"))]
 mod tests {
     use super::*;
-    use crate::nn::{Act, MlpParams, Trainer};
+    use crate::nn::Trainer;
 
     fn data(n: usize) -> (Vec<f64>, Vec<f64>) {
         let t: Vec<f64> = (0..n)
@@ -434,27 +529,22 @@ mod tests {
     }
 
     fn params(variant: Variant) -> HybridParams {
-        HybridParams {
-            variant,
-            ma_lags: 1,
-            ar_lags: 2,
-            c_y: 0.02,
-            limit: 50.0,
-            net: MlpParams {
-                hidden_sizes: vec![10],
-                hidden: Act::Tanh,
-                output: Act::Tanh,
-                output_scale: 1.0,
-                init: 0.5,
-                trainer: Trainer::Adam {
-                    lr: 0.01,
-                    max_epochs: 1500,
-                    goal: 1e-7,
-                    patience: 300,
-                },
-                seed: 2,
-            },
-        }
+        HybridParams::new()
+            .variant(variant)
+            .ma_lags(1)
+            .ar_lags(2)
+            .c_y(0.02)
+            .limit(50.0)
+            .net(|n| {
+                n.hidden_sizes(vec![10])
+                    .init(0.5)
+                    .trainer(Trainer::Adam)
+                    .lr(0.01)
+                    .max_epochs(1500)
+                    .goal(Some(1e-7))
+                    .patience(300)
+                    .seed(2)
+            })
     }
 
     #[test]
@@ -462,8 +552,9 @@ mod tests {
         let (t, y) = data(120);
         let s = crate::samples::Samples::new(&t, 120, 2).unwrap();
         for v in [Variant::Hybrid, Variant::Arma, Variant::LrNn, Variant::Fnn] {
-            let (model, _) = params(v).fit(s, &y, &[]).unwrap();
+            let model = params(v).check().unwrap().fit(s, &y, &[]).unwrap();
             model.validate().unwrap();
+            assert_eq!(model.history.is_empty(), v == Variant::Arma);
             let closed = model.predict(&t, None).unwrap();
             let one = model.predict(&t, Some(&y)).unwrap();
             let mut st = HybridState::new(&model);
@@ -476,10 +567,15 @@ mod tests {
             let back: HybridModel =
                 serde_json::from_str(&serde_json::to_string(&model).unwrap()).unwrap();
             assert_eq!(back.predict(&t, Some(&y)).unwrap(), one);
+            assert_eq!(back.history, model.history);
         }
         // one step ahead, the ARMA filter follows this autoregressive process closely (its LR and
         // MA outputs are least-squares fits, not the process's exact terms, so not exactly)
-        let (arma, _) = params(Variant::Arma).fit(s, &y, &[]).unwrap();
+        let arma = params(Variant::Arma)
+            .check()
+            .unwrap()
+            .fit(s, &y, &[])
+            .unwrap();
         let one = arma.predict(&t, Some(&y)).unwrap();
         let n = y.len() as f64;
         let mean = y.iter().sum::<f64>() / n;
@@ -498,9 +594,27 @@ mod tests {
     fn refuses_errors_beyond_the_limit_and_bad_starts() {
         let (t, y) = data(60);
         let s = crate::samples::Samples::new(&t, 60, 2).unwrap();
-        let mut p = params(Variant::Hybrid);
-        p.limit = 1.0;
+        let p = params(Variant::Hybrid).limit(1.0).check().unwrap();
         assert!(p.fit(s, &y, &[]).is_err());
-        assert!(params(Variant::Hybrid).fit(s, &y, &[60]).is_err());
+        let p = params(Variant::Hybrid).check().unwrap();
+        assert!(p.fit(s, &y, &[60]).is_err());
+        assert!(params(Variant::Hybrid).ma_lags(0).check().is_err());
+        assert!(params(Variant::Hybrid).c_y(0.0).check().is_err());
+        // the ARMA filter has no network, so its network's parameters are not checked
+        assert!(params(Variant::Hybrid).net(|n| n.lr(0.0)).check().is_err());
+        assert!(params(Variant::Arma).net(|n| n.lr(0.0)).check().is_ok());
+    }
+
+    #[test]
+    fn names_parse_as_serde_reads_them() {
+        crate::error::assert_names_agree(&Variant::NAMES);
+    }
+
+    #[test]
+    fn autotraits() {
+        fn is_send_sync<T: Send + Sync>() {}
+        is_send_sync::<HybridParams>();
+        is_send_sync::<HybridValidParams>();
+        is_send_sync::<HybridModel>();
     }
 }

@@ -9,17 +9,40 @@ use crate::linalg::lstsq;
 use crate::samples::check_target;
 use crate::samples::Samples;
 
-/// Hyper-parameters of [`LinearRegression`].
+/// Hyper-parameters of [`LinearRegression`]; a consuming builder with defaults, checked by
+/// [`MlrParams::check`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct MlrParams(MlrValidParams);
+
+/// Checked hyper-parameters; [`MlrValidParams::fit`] fits the model.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct MlrParams {
+pub struct MlrValidParams {
     pub fit_intercept: bool,
 }
 
 impl Default for MlrParams {
+    /// With an intercept.
     fn default() -> Self {
-        MlrParams {
+        MlrParams(MlrValidParams {
             fit_intercept: true,
-        }
+        })
+    }
+}
+
+impl MlrParams {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Whether to fit an intercept (otherwise the plane goes through the origin).
+    pub fn fit_intercept(mut self, v: bool) -> Self {
+        self.0.fit_intercept = v;
+        self
+    }
+
+    /// Every value is valid; kept for the shape every family shares.
+    pub fn check(self) -> Result<MlrValidParams> {
+        Ok(self.0)
     }
 }
 
@@ -31,7 +54,7 @@ pub struct LinearRegression {
 }
 
 #[cfg(feature = "fit")]
-impl MlrParams {
+impl MlrValidParams {
     /// Fits by least squares on centred data, as scikit-learn's `LinearRegression` does (centring
     /// keeps the intercept out of the conditioning of the design matrix).
     pub fn fit(&self, x: Samples<'_>, y: &[f64]) -> Result<LinearRegression> {
@@ -106,12 +129,22 @@ mod tests {
             .flat_map(|i| [i as f64, ((i * 7) % 5) as f64])
             .collect();
         let y: Vec<f64> = x.chunks(2).map(|r| 3.0 + 0.5 * r[0] - 2.0 * r[1]).collect();
-        let m = MlrParams::default()
+        let m = MlrParams::new()
+            .check()
+            .unwrap()
             .fit(Samples::new(&x, 20, 2).unwrap(), &y)
             .unwrap();
         assert_relative_eq!(m.intercept, 3.0, epsilon = 1e-10);
         assert_relative_eq!(m.coef[0], 0.5, epsilon = 1e-12);
         assert_relative_eq!(m.coef[1], -2.0, epsilon = 1e-12);
         assert!(m.predict(Samples::new(&[1.0], 1, 1).unwrap()).is_err());
+    }
+
+    #[test]
+    fn autotraits() {
+        fn is_send_sync<T: Send + Sync>() {}
+        is_send_sync::<MlrParams>();
+        is_send_sync::<MlrValidParams>();
+        is_send_sync::<LinearRegression>();
     }
 }

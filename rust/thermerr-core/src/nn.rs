@@ -10,11 +10,11 @@
 // index loops read like the backpropagation formulas they implement
 #![allow(clippy::needless_range_loop)]
 
+use std::str::FromStr;
+
 use serde::{Deserialize, Serialize};
 
-#[cfg(feature = "fit")]
-use crate::error::Error;
-use crate::error::Result;
+use crate::error::{parse_name, Error, Result};
 #[cfg(feature = "fit")]
 use crate::samples::{check_target, Samples};
 
@@ -27,7 +27,20 @@ pub enum Act {
     Linear,
 }
 
+impl FromStr for Act {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        parse_name("activation", s, &Self::NAMES)
+    }
+}
+
 impl Act {
+    const NAMES: [(&'static str, Act); 3] = [
+        ("sigmoid", Act::Sigmoid),
+        ("tanh", Act::Tanh),
+        ("linear", Act::Linear),
+    ];
+
     #[inline]
     fn f(self, v: f64) -> f64 {
         match self {
@@ -143,6 +156,9 @@ pub struct BpModel {
     pub y_min: f64,
     pub y_max: f64,
     pub net: Mlp,
+    /// Training MSE (on the scaled target) after each epoch; empty in files written before it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub history: Vec<f64>,
 }
 
 impl BpModel {
@@ -188,39 +204,189 @@ impl BpModel {
 }
 
 /// How a network is trained.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Trainer {
-    /// Batch gradient descent with momentum: Δ ← momentum·Δ − lr·∇, until MSE ≤ goal or
-    /// `max_epochs`.
-    Gd {
-        lr: f64,
-        momentum: f64,
-        max_epochs: usize,
-        goal: f64,
-    },
+    /// The seeds' batch gradient descent with momentum: Δ ← momentum·Δ − lr·∇, until MSE ≤ goal
+    /// or `max_epochs`.
+    #[serde(rename = "seed", alias = "gd")]
+    Gd,
     /// Batch Adam (β1 0.9, β2 0.999), until MSE ≤ goal, `max_epochs`, or no relative improvement
     /// of 1e-6 in `patience` epochs.
-    Adam {
-        lr: f64,
-        max_epochs: usize,
-        goal: f64,
-        patience: usize,
-    },
+    #[serde(rename = "adam")]
+    Adam,
 }
 
-/// Hyper-parameters of a network and its training.
+impl Trainer {
+    const NAMES: [(&'static str, Trainer); 3] = [
+        ("seed", Trainer::Gd),
+        ("gd", Trainer::Gd),
+        ("adam", Trainer::Adam),
+    ];
+
+    /// The MSE goal when none is given: 0.01 for the seed's trainer, 1e-5 for Adam.
+    pub fn default_goal(self) -> f64 {
+        match self {
+            Trainer::Gd => 0.01,
+            Trainer::Adam => 1e-5,
+        }
+    }
+}
+
+impl FromStr for Trainer {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        parse_name("trainer", s, &Self::NAMES)
+    }
+}
+
+/// Hyper-parameters of a BP network and its training; a consuming builder with the defaults of
+/// seed 002's network, checked by [`BpParams::check`]. The rolling GM + BP and the hybrid filter
+/// models hold one for their network.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BpParams(pub(crate) BpValidParams);
+
+/// Checked hyper-parameters; [`BpValidParams::fit`] trains a [`BpModel`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct MlpParams {
+pub struct BpValidParams {
     /// Hidden layer widths.
     pub hidden_sizes: Vec<usize>,
-    pub hidden: Act,
-    pub output: Act,
+    pub hidden_activation: Act,
+    pub output_activation: Act,
     pub output_scale: f64,
     /// Initial weights and biases uniform in [−init, init].
     pub init: f64,
     pub trainer: Trainer,
+    pub lr: f64,
+    /// Momentum of the seed's trainer (Adam ignores it).
+    pub momentum: f64,
+    pub max_epochs: usize,
+    /// MSE goal; `None`: [`Trainer::default_goal`].
+    pub goal: Option<f64>,
+    /// Epochs without improvement after which Adam stops (the seed's trainer ignores it).
+    pub patience: usize,
     pub seed: u64,
+}
+
+impl Default for BpParams {
+    /// 7 sigmoid hidden units, linear output of scale 1, initial weights in [−1, 1]; Adam with
+    /// lr 0.01 (momentum 0.9 for the seed's trainer), at most 8000 epochs, the trainer's MSE goal,
+    /// patience 500, seed 0.
+    fn default() -> Self {
+        BpParams(BpValidParams {
+            hidden_sizes: vec![7],
+            hidden_activation: Act::Sigmoid,
+            output_activation: Act::Linear,
+            output_scale: 1.0,
+            init: 1.0,
+            trainer: Trainer::Adam,
+            lr: 0.01,
+            momentum: 0.9,
+            max_epochs: 8000,
+            goal: None,
+            patience: 500,
+            seed: 0,
+        })
+    }
+}
+
+impl BpParams {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Hidden layer widths, each >= 1.
+    pub fn hidden_sizes(mut self, sizes: Vec<usize>) -> Self {
+        self.0.hidden_sizes = sizes;
+        self
+    }
+
+    pub fn hidden_activation(mut self, act: Act) -> Self {
+        self.0.hidden_activation = act;
+        self
+    }
+
+    pub fn output_activation(mut self, act: Act) -> Self {
+        self.0.output_activation = act;
+        self
+    }
+
+    /// Factor on the output activation (finite, non-zero).
+    pub fn output_scale(mut self, scale: f64) -> Self {
+        self.0.output_scale = scale;
+        self
+    }
+
+    /// Half-width of the uniform initial weights, > 0.
+    pub fn init(mut self, init: f64) -> Self {
+        self.0.init = init;
+        self
+    }
+
+    pub fn trainer(mut self, trainer: Trainer) -> Self {
+        self.0.trainer = trainer;
+        self
+    }
+
+    /// Learning rate, > 0.
+    pub fn lr(mut self, lr: f64) -> Self {
+        self.0.lr = lr;
+        self
+    }
+
+    /// Momentum of the seed's trainer, in [0, 1).
+    pub fn momentum(mut self, momentum: f64) -> Self {
+        self.0.momentum = momentum;
+        self
+    }
+
+    pub fn max_epochs(mut self, max_epochs: usize) -> Self {
+        self.0.max_epochs = max_epochs;
+        self
+    }
+
+    /// MSE goal (`None`: the trainer's default).
+    pub fn goal(mut self, goal: Option<f64>) -> Self {
+        self.0.goal = goal;
+        self
+    }
+
+    pub fn patience(mut self, patience: usize) -> Self {
+        self.0.patience = patience;
+        self
+    }
+
+    /// Seed of the initial weights (ChaCha8).
+    pub fn seed(mut self, seed: u64) -> Self {
+        self.0.seed = seed;
+        self
+    }
+
+    /// Validates every parameter (none depends on the data).
+    pub fn check(self) -> Result<BpValidParams> {
+        let p = self.0;
+        if p.hidden_sizes.contains(&0) {
+            return Err(Error::param("hidden", "layer widths must be >= 1"));
+        }
+        if !(p.init > 0.0 && p.init.is_finite()) {
+            return Err(Error::param("init", format!("must be > 0, got {}", p.init)));
+        }
+        if !(p.output_scale.is_finite() && p.output_scale != 0.0) {
+            return Err(Error::param("output_scale", "must be finite and non-zero"));
+        }
+        if p.trainer == Trainer::Gd && !(0.0..1.0).contains(&p.momentum) {
+            return Err(Error::param(
+                "momentum",
+                format!("must be in [0, 1), got {}", p.momentum),
+            ));
+        }
+        if !(p.lr > 0.0 && p.lr.is_finite()) {
+            return Err(Error::param("lr", format!("must be > 0, got {}", p.lr)));
+        }
+        if p.max_epochs == 0 {
+            return Err(Error::param("max_epochs", "must be >= 1"));
+        }
+        Ok(p)
+    }
 }
 
 /// A trained network and its training record.
@@ -232,48 +398,9 @@ pub struct Trained {
 }
 
 #[cfg(feature = "fit")]
-impl MlpParams {
-    fn check(&self) -> Result<()> {
-        if self.hidden_sizes.contains(&0) {
-            return Err(Error::param("hidden", "layer widths must be >= 1"));
-        }
-        if !(self.init > 0.0 && self.init.is_finite()) {
-            return Err(Error::param(
-                "init",
-                format!("must be > 0, got {}", self.init),
-            ));
-        }
-        if !(self.output_scale.is_finite() && self.output_scale != 0.0) {
-            return Err(Error::param("output_scale", "must be finite and non-zero"));
-        }
-        let (lr, epochs) = match self.trainer {
-            Trainer::Gd {
-                lr,
-                momentum,
-                max_epochs,
-                ..
-            } => {
-                if !(0.0..1.0).contains(&momentum) {
-                    return Err(Error::param(
-                        "momentum",
-                        format!("must be in [0, 1), got {momentum}"),
-                    ));
-                }
-                (lr, max_epochs)
-            }
-            Trainer::Adam { lr, max_epochs, .. } => (lr, max_epochs),
-        };
-        if !(lr > 0.0 && lr.is_finite()) {
-            return Err(Error::param("lr", format!("must be > 0, got {lr}")));
-        }
-        if epochs == 0 {
-            return Err(Error::param("max_epochs", "must be >= 1"));
-        }
-        Ok(())
-    }
-
+impl BpValidParams {
     /// The initial network of this seed.
-    pub fn init_net(&self, n_inputs: usize) -> Mlp {
+    fn init_net(&self, n_inputs: usize) -> Mlp {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(self.seed);
         let mut sizes = vec![n_inputs];
@@ -289,27 +416,25 @@ impl MlpParams {
             .collect();
         Mlp {
             sizes,
-            hidden: self.hidden,
-            output: self.output,
+            hidden: self.hidden_activation,
+            output: self.output_activation,
             output_scale: self.output_scale,
             weights,
             biases,
         }
     }
 
-    /// Trains on the rows of `x` to the targets `y` (in output units, i.e. including the scale).
-    pub fn fit(&self, x: Samples<'_>, y: &[f64]) -> Result<Trained> {
-        self.check()?;
+    /// Trains the network itself on the rows of `x` to the targets `y` (in output units, i.e.
+    /// including the scale), with no scaling of its own.
+    pub(crate) fn train(&self, x: Samples<'_>, y: &[f64]) -> Result<Trained> {
         x.require_finite("X")?;
         check_target(y, x.nrows())?;
         let mut net = self.init_net(x.ncols());
+        let (lr, max_epochs) = (self.lr, self.max_epochs);
+        let goal = self.goal.unwrap_or(self.trainer.default_goal());
         let history = match self.trainer {
-            Trainer::Gd {
-                lr,
-                momentum,
-                max_epochs,
-                goal,
-            } => {
+            Trainer::Gd => {
+                let momentum = self.momentum;
                 let mut vel = zeros_like(&net);
                 let mut hist = Vec::new();
                 for _ in 0..max_epochs {
@@ -331,12 +456,8 @@ impl MlpParams {
                 }
                 hist
             }
-            Trainer::Adam {
-                lr,
-                max_epochs,
-                goal,
-                patience,
-            } => {
+            Trainer::Adam => {
+                let patience = self.patience;
                 let (b1, b2, eps) = (0.9f64, 0.999f64, 1e-8);
                 let mut m = zeros_like(&net);
                 let mut v = zeros_like(&net);
@@ -379,12 +500,9 @@ impl MlpParams {
         };
         Ok(Trained { net, history })
     }
-}
 
-#[cfg(feature = "fit")]
-impl MlpParams {
     /// Fits a [`BpModel`]: inputs and target min–max scaled by the training ranges.
-    pub fn fit_bp(&self, x: Samples<'_>, y: &[f64]) -> Result<(BpModel, Vec<f64>)> {
+    pub fn fit(&self, x: Samples<'_>, y: &[f64]) -> Result<BpModel> {
         x.require_finite("X")?;
         check_target(y, x.nrows())?;
         let d = x.ncols();
@@ -404,15 +522,15 @@ impl MlpParams {
             .map(|(j, v)| scale01(v, x_min[j], x_max[j]))
             .collect();
         let ys: Vec<f64> = y.iter().map(|&v| scale01(v, y_min, y_max)).collect();
-        let t = self.fit(Samples::new(&xs, y.len(), d)?, &ys)?;
-        let model = BpModel {
+        let t = self.train(Samples::new(&xs, y.len(), d)?, &ys)?;
+        Ok(BpModel {
             x_min,
             x_max,
             y_min,
             y_max,
             net: t.net,
-        };
-        Ok((model, t.history))
+            history: t.history,
+        })
     }
 }
 
@@ -496,16 +614,12 @@ pub fn mse_grad(net: &Mlp, x: Samples<'_>, y: &[f64]) -> (f64, Mlp) {
 mod tests {
     use super::*;
 
-    fn params(trainer: Trainer) -> MlpParams {
-        MlpParams {
-            hidden_sizes: vec![7],
-            hidden: Act::Sigmoid,
-            output: Act::Linear,
-            output_scale: 1.0,
-            init: 1.0,
-            trainer,
-            seed: 3,
-        }
+    fn params(trainer: Trainer) -> BpParams {
+        BpParams::new()
+            .hidden_sizes(vec![7])
+            .init(1.0)
+            .trainer(trainer)
+            .seed(3)
     }
 
     #[test]
@@ -519,16 +633,17 @@ mod tests {
             (Act::Sigmoid, Act::Linear, 1.0),
             (Act::Tanh, Act::Tanh, 50.0),
         ] {
-            let mut p = params(Trainer::Gd {
-                lr: 0.01,
-                momentum: 0.9,
-                max_epochs: 1,
-                goal: 0.0,
-            });
-            p.hidden = hidden;
-            p.output = output;
-            p.output_scale = scale;
-            p.hidden_sizes = vec![5, 3];
+            let p = params(Trainer::Gd)
+                .lr(0.01)
+                .momentum(0.9)
+                .max_epochs(1)
+                .goal(Some(0.0))
+                .hidden_activation(hidden)
+                .output_activation(output)
+                .output_scale(scale)
+                .hidden_sizes(vec![5, 3])
+                .check()
+                .unwrap();
             let net = p.init_net(2);
             let (_, g) = mse_grad(&net, s, &y);
             let analytic: Vec<f64> = flat(&g).collect();
@@ -551,32 +666,89 @@ mod tests {
         let x: Vec<f64> = (0..40).map(|i| i as f64 / 39.0).collect();
         let y: Vec<f64> = x.iter().map(|v| (3.0 * v).sin()).collect();
         let s = Samples::new(&x, 40, 1).unwrap();
-        let adam = params(Trainer::Adam {
-            lr: 0.05,
-            max_epochs: 5000,
-            goal: 1e-4,
-            patience: 500,
-        });
-        let a = adam.fit(s, &y).unwrap();
+        let adam = params(Trainer::Adam)
+            .lr(0.05)
+            .max_epochs(5000)
+            .goal(Some(1e-4))
+            .patience(500)
+            .check()
+            .unwrap();
+        let a = adam.train(s, &y).unwrap();
         // measured: reaches the 1e-4 goal in about 1–2 thousand epochs
         assert!(
             *a.history.last().unwrap() <= 1e-4 * 1.01,
             "{:?}",
             a.history.last()
         );
-        let b = adam.fit(s, &y).unwrap();
+        let b = adam.train(s, &y).unwrap();
         assert_eq!(a.net, b.net);
-        let gd = params(Trainer::Gd {
-            lr: 0.5,
-            momentum: 0.9,
-            max_epochs: 3000,
-            goal: 1e-3,
-        })
-        .fit(s, &y)
-        .unwrap();
+        let gd = params(Trainer::Gd)
+            .lr(0.5)
+            .momentum(0.9)
+            .max_epochs(3000)
+            .goal(Some(1e-3))
+            .check()
+            .unwrap()
+            .train(s, &y)
+            .unwrap();
         assert!(*gd.history.last().unwrap() < 1e-2);
         let mut scratch = vec![0.0; a.net.scratch_len()];
         let p = a.net.predict_one(&[0.5], &mut scratch);
         assert!((p - 1.5f64.sin()).abs() < 0.05);
+    }
+
+    #[test]
+    fn bp_model_keeps_its_history_through_json() {
+        let x: Vec<f64> = (0..30).map(|i| i as f64).collect();
+        let y: Vec<f64> = x.iter().map(|v| (v / 9.0).sin()).collect();
+        let s = Samples::new(&x, 30, 1).unwrap();
+        let m = params(Trainer::Gd)
+            .max_epochs(50)
+            .goal(Some(0.0))
+            .check()
+            .unwrap()
+            .fit(s, &y)
+            .unwrap();
+        assert_eq!(m.history.len(), 50);
+        let back: BpModel = serde_json::from_str(&serde_json::to_string(&m).unwrap()).unwrap();
+        assert_eq!(back, m);
+        // a file written before the history was kept still loads
+        let mut old = serde_json::to_value(&m).unwrap();
+        old.as_object_mut().unwrap().remove("history");
+        let old: BpModel = serde_json::from_value(old).unwrap();
+        assert!(old.history.is_empty());
+    }
+
+    #[test]
+    fn bad_params_are_refused() {
+        assert!(BpParams::new().hidden_sizes(vec![3, 0]).check().is_err());
+        assert!(BpParams::new().lr(0.0).check().is_err());
+        assert!(BpParams::new().max_epochs(0).check().is_err());
+        // momentum only matters to the seed's trainer
+        assert!(BpParams::new().momentum(1.0).check().is_ok());
+        assert!(BpParams::new()
+            .trainer(Trainer::Gd)
+            .momentum(1.0)
+            .check()
+            .is_err());
+    }
+
+    #[test]
+    fn names_parse_as_serde_reads_them() {
+        crate::error::assert_names_agree(&Act::NAMES);
+        crate::error::assert_names_agree(&Trainer::NAMES);
+        let e = "lbfgs".parse::<Trainer>().unwrap_err().to_string();
+        assert!(
+            e.contains("`trainer`") && e.contains(r#""adam", got "lbfgs""#),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn autotraits() {
+        fn is_send_sync<T: Send + Sync>() {}
+        is_send_sync::<BpParams>();
+        is_send_sync::<BpValidParams>();
+        is_send_sync::<BpModel>();
     }
 }

@@ -8,11 +8,11 @@
 //! the sum-squared error most — or, with `Rule::MaxError`, the one with the largest residual —
 //! until the goal or the neuron cap) and `KMeans` (k-means centres, least-squares weights).
 
+use std::str::FromStr;
+
 use serde::{Deserialize, Serialize};
 
-#[cfg(feature = "fit")]
-use crate::error::Error;
-use crate::error::Result;
+use crate::error::{parse_name, Error, Result};
 #[cfg(feature = "fit")]
 use crate::kmeans::{kmeans, kmeans_plus_plus};
 #[cfg(feature = "fit")]
@@ -27,12 +27,28 @@ use rayon::prelude::*;
 /// √(−ln 0.5): MATLAB's radbas width constant (0.8326).
 pub const RADBAS: f64 = 0.832_554_611_157_697_7;
 
+/// How the hidden layer is built.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Design {
     Exact,
     Ols,
     KMeans,
+}
+
+impl Design {
+    const NAMES: [(&'static str, Design); 3] = [
+        ("exact", Design::Exact),
+        ("ols", Design::Ols),
+        ("kmeans", Design::KMeans),
+    ];
+}
+
+impl FromStr for Design {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        parse_name("design", s, &Self::NAMES)
+    }
 }
 
 /// How the incremental design picks its next neuron.
@@ -45,9 +61,25 @@ pub enum Rule {
     MaxError,
 }
 
-/// Hyper-parameters of an RBF network.
+impl Rule {
+    const NAMES: [(&'static str, Rule); 2] = [("ols", Rule::Ols), ("max_error", Rule::MaxError)];
+}
+
+impl FromStr for Rule {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        parse_name("rule", s, &Self::NAMES)
+    }
+}
+
+/// Hyper-parameters of an RBF network; a consuming builder with defaults, checked by
+/// [`RbfParams::check`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct RbfParams(RbfValidParams);
+
+/// Checked hyper-parameters; [`RbfValidParams::fit`] trains the network.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct RbfParams {
+pub struct RbfValidParams {
     pub design: Design,
     pub spread: f64,
     /// Sum-squared-error goal of the OLS design.
@@ -59,8 +91,10 @@ pub struct RbfParams {
 }
 
 impl Default for RbfParams {
+    /// Exact design, spread 1, SSE goal 0, no neuron cap, min(n, 10) k-means centres, k-means++
+    /// seed 0, the OLS selection rule.
     fn default() -> Self {
-        RbfParams {
+        RbfParams(RbfValidParams {
             design: Design::Exact,
             spread: 1.0,
             goal: 0.0,
@@ -68,7 +102,77 @@ impl Default for RbfParams {
             n_centers: None,
             seed: None,
             rule: Rule::Ols,
+        })
+    }
+}
+
+impl RbfParams {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn design(mut self, design: Design) -> Self {
+        self.0.design = design;
+        self
+    }
+
+    /// Width of every neuron in input units (φ = 0.5 at this distance), > 0.
+    pub fn spread(mut self, spread: f64) -> Self {
+        self.0.spread = spread;
+        self
+    }
+
+    /// Sum-squared-error goal of the OLS design, >= 0.
+    pub fn goal(mut self, goal: f64) -> Self {
+        self.0.goal = goal;
+        self
+    }
+
+    /// Neuron cap of the OLS design (`None`: the number of samples).
+    pub fn max_neurons(mut self, max_neurons: Option<usize>) -> Self {
+        self.0.max_neurons = max_neurons;
+        self
+    }
+
+    /// Centres of the k-means design (`None`: min(n, 10)).
+    pub fn n_centers(mut self, n_centers: Option<usize>) -> Self {
+        self.0.n_centers = n_centers;
+        self
+    }
+
+    /// Seed of the k-means++ start (`None`: 0).
+    pub fn seed(mut self, seed: Option<u64>) -> Self {
+        self.0.seed = seed;
+        self
+    }
+
+    pub fn rule(mut self, rule: Rule) -> Self {
+        self.0.rule = rule;
+        self
+    }
+
+    /// Validates everything that does not depend on the data.
+    pub fn check(self) -> Result<RbfValidParams> {
+        let p = self.0;
+        if !(p.spread.is_finite() && p.spread > 0.0) {
+            return Err(Error::param(
+                "spread",
+                format!("must be > 0, got {}", p.spread),
+            ));
         }
+        if !(p.goal.is_finite() && p.goal >= 0.0) {
+            return Err(Error::param(
+                "goal",
+                format!("must be >= 0, got {}", p.goal),
+            ));
+        }
+        if p.max_neurons == Some(0) {
+            return Err(Error::param("max_neurons", "must be >= 1"));
+        }
+        if p.n_centers == Some(0) {
+            return Err(Error::param("n_centers", "must be >= 1"));
+        }
+        Ok(p)
     }
 }
 
@@ -82,6 +186,7 @@ pub struct RbfNetwork {
     /// Training-sample index of each centre (exact and OLS designs).
     pub selected: Vec<usize>,
     /// Sum-squared training error after each neuron (OLS design; bias only first).
+    #[serde(default)]
     pub sse_history: Vec<f64>,
 }
 
@@ -116,41 +221,18 @@ fn rows_of(x: Samples<'_>, idx: &[usize]) -> Matrix {
 }
 
 #[cfg(feature = "fit")]
-impl RbfParams {
-    fn check(&self, n: usize) -> Result<()> {
-        if !(self.spread.is_finite() && self.spread > 0.0) {
-            return Err(Error::param(
-                "spread",
-                format!("must be > 0, got {}", self.spread),
-            ));
-        }
-        if !(self.goal.is_finite() && self.goal >= 0.0) {
-            return Err(Error::param(
-                "goal",
-                format!("must be >= 0, got {}", self.goal),
-            ));
-        }
-        if let Some(m) = self.max_neurons {
-            if m == 0 {
-                return Err(Error::param("max_neurons", "must be >= 1"));
-            }
-        }
-        if let Some(c) = self.n_centers {
-            if c == 0 || c > n {
-                return Err(Error::param(
-                    "n_centers",
-                    format!("must be within 1..={n}, got {c}"),
-                ));
-            }
-        }
-        Ok(())
-    }
-
+impl RbfValidParams {
+    /// Trains on the rows of `x` to the targets `y`.
     pub fn fit(&self, x: Samples<'_>, y: &[f64]) -> Result<RbfNetwork> {
         x.require_finite("X")?;
         check_target(y, x.nrows())?;
         let n = x.nrows();
-        self.check(n)?;
+        if let Some(c) = self.n_centers.filter(|&c| c > n) {
+            return Err(Error::param(
+                "n_centers",
+                format!("must be within 1..={n}, got {c}"),
+            ));
+        }
         let b = RADBAS / self.spread;
         match self.design {
             Design::Exact => {
@@ -358,12 +440,12 @@ mod tests {
     fn exact_interpolates() {
         let (x, y) = data();
         let s = Samples::new(&x, 30, 2).unwrap();
-        let net = RbfParams {
-            spread: 0.5,
-            ..Default::default()
-        }
-        .fit(s, &y)
-        .unwrap();
+        let net = RbfParams::new()
+            .spread(0.5)
+            .check()
+            .unwrap()
+            .fit(s, &y)
+            .unwrap();
         for (p, t) in net.predict(s).unwrap().iter().zip(&y) {
             assert_relative_eq!(p, t, epsilon = 1e-8);
         }
@@ -373,12 +455,12 @@ mod tests {
     fn ols_sse_decreases_and_stops_at_goal() {
         let (x, y) = data();
         let s = Samples::new(&x, 30, 2).unwrap();
-        let p = RbfParams {
-            design: Design::Ols,
-            spread: 0.8,
-            goal: 0.01,
-            ..Default::default()
-        };
+        let p = RbfParams::new()
+            .design(Design::Ols)
+            .spread(0.8)
+            .goal(0.01)
+            .check()
+            .unwrap();
         let net = p.fit(s, &y).unwrap();
         assert!(net.sse_history.windows(2).all(|w| w[1] <= w[0] + 1e-12));
         assert!(*net.sse_history.last().unwrap() <= 0.01);
@@ -392,18 +474,33 @@ mod tests {
     fn refuses_bad_params() {
         let (x, y) = data();
         let s = Samples::new(&x, 30, 2).unwrap();
-        assert!(RbfParams {
-            spread: 0.0,
-            ..Default::default()
-        }
-        .fit(s, &y)
-        .is_err());
-        assert!(RbfParams {
-            design: Design::KMeans,
-            n_centers: Some(31),
-            ..Default::default()
-        }
-        .fit(s, &y)
-        .is_err());
+        assert!(RbfParams::new().spread(0.0).check().is_err());
+        assert!(RbfParams::new().n_centers(Some(0)).check().is_err());
+        assert!(RbfParams::new()
+            .design(Design::KMeans)
+            .n_centers(Some(31))
+            .check()
+            .unwrap()
+            .fit(s, &y)
+            .is_err());
+    }
+
+    #[test]
+    fn names_parse_as_serde_reads_them() {
+        crate::error::assert_names_agree(&Design::NAMES);
+        crate::error::assert_names_agree(&Rule::NAMES);
+        let e = "magic".parse::<Design>().unwrap_err().to_string();
+        assert!(
+            e.contains(r#"must be "exact", "ols" or "kmeans", got "magic""#),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn autotraits() {
+        fn is_send_sync<T: Send + Sync>() {}
+        is_send_sync::<RbfParams>();
+        is_send_sync::<RbfValidParams>();
+        is_send_sync::<RbfNetwork>();
     }
 }

@@ -10,11 +10,11 @@
 //! Kernel values in the solver follow LIBSVM's arithmetic to the bit: ‖xᵢ‖² + ‖xⱼ‖² − 2 xᵢ·xⱼ
 //! with sequential sums, `exp` in double, then rounded to `f32` for the cache (LIBSVM's `Qfloat`).
 
+use std::str::FromStr;
+
 use serde::{Deserialize, Serialize};
 
-#[cfg(feature = "fit")]
-use crate::error::Error;
-use crate::error::Result;
+use crate::error::{parse_name, Error, Result};
 use crate::linear::check_features;
 #[cfg(feature = "fit")]
 use crate::samples::check_target;
@@ -145,6 +145,21 @@ pub enum Gamma {
     Value(f64),
 }
 
+impl FromStr for Gamma {
+    type Err = Error;
+    /// The names only ("scale", "auto"); a number is [`Gamma::Value`].
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "scale" => Ok(Gamma::Scale),
+            "auto" => Ok(Gamma::Auto),
+            other => Err(Error::param(
+                "gamma",
+                format!("must be \"scale\", \"auto\" or a positive number, got {other:?}"),
+            )),
+        }
+    }
+}
+
 /// Which kernel to fit with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -153,9 +168,26 @@ pub enum KernelKind {
     Linear,
 }
 
-/// Hyper-parameters of an ε-SVR, with scikit-learn's meaning and defaults.
+impl KernelKind {
+    const NAMES: [(&'static str, KernelKind); 2] =
+        [("rbf", KernelKind::Rbf), ("linear", KernelKind::Linear)];
+}
+
+impl FromStr for KernelKind {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        parse_name("kernel", s, &Self::NAMES)
+    }
+}
+
+/// Hyper-parameters of an ε-SVR; a consuming builder with scikit-learn's meaning and defaults,
+/// checked by [`SvrParams::check`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SvrParams(SvrValidParams);
+
+/// Checked hyper-parameters; [`SvrValidParams::fit`] solves the dual.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct SvrParams {
+pub struct SvrValidParams {
     pub c: f64,
     pub epsilon: f64,
     pub kernel: KernelKind,
@@ -170,8 +202,10 @@ pub struct SvrParams {
 }
 
 impl Default for SvrParams {
+    /// scikit-learn's: C = 1, ε = 0.1, RBF kernel with γ = "scale", tol = 1e-3, shrinking, a
+    /// 200 MiB cache, no iteration cap.
     fn default() -> Self {
-        SvrParams {
+        SvrParams(SvrValidParams {
             c: 1.0,
             epsilon: 0.1,
             kernel: KernelKind::Rbf,
@@ -180,7 +214,85 @@ impl Default for SvrParams {
             shrinking: true,
             cache_size: 200.0,
             max_iter: None,
+        })
+    }
+}
+
+impl SvrParams {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Box constraint of the dual variables, > 0.
+    pub fn c(mut self, c: f64) -> Self {
+        self.0.c = c;
+        self
+    }
+
+    /// Half-width of the ε-insensitive tube, >= 0.
+    pub fn epsilon(mut self, epsilon: f64) -> Self {
+        self.0.epsilon = epsilon;
+        self
+    }
+
+    pub fn kernel(mut self, kernel: KernelKind) -> Self {
+        self.0.kernel = kernel;
+        self
+    }
+
+    pub fn gamma(mut self, gamma: Gamma) -> Self {
+        self.0.gamma = gamma;
+        self
+    }
+
+    pub fn tol(mut self, tol: f64) -> Self {
+        self.0.tol = tol;
+        self
+    }
+
+    pub fn shrinking(mut self, shrinking: bool) -> Self {
+        self.0.shrinking = shrinking;
+        self
+    }
+
+    /// Kernel cache in MiB, > 0.
+    pub fn cache_size(mut self, cache_size: f64) -> Self {
+        self.0.cache_size = cache_size;
+        self
+    }
+
+    pub fn max_iter(mut self, max_iter: Option<usize>) -> Self {
+        self.0.max_iter = max_iter;
+        self
+    }
+
+    /// Validates every parameter (none depends on the data).
+    pub fn check(self) -> Result<SvrValidParams> {
+        let p = self.0;
+        if !(p.c > 0.0 && p.c.is_finite()) {
+            return Err(Error::param("C", format!("must be > 0, got {}", p.c)));
         }
+        if !(p.epsilon >= 0.0 && p.epsilon.is_finite()) {
+            return Err(Error::param(
+                "epsilon",
+                format!("must be >= 0, got {}", p.epsilon),
+            ));
+        }
+        if !(p.tol > 0.0 && p.tol.is_finite()) {
+            return Err(Error::param("tol", format!("must be > 0, got {}", p.tol)));
+        }
+        if !(p.cache_size > 0.0 && p.cache_size.is_finite()) {
+            return Err(Error::param(
+                "cache_size",
+                format!("must be > 0 MiB, got {}", p.cache_size),
+            ));
+        }
+        if let Gamma::Value(g) = p.gamma {
+            if !(g > 0.0 && g.is_finite()) {
+                return Err(Error::param("gamma", format!("must be > 0, got {g}")));
+            }
+        }
+        Ok(p)
     }
 }
 
@@ -199,37 +311,7 @@ pub fn scale_gamma(x: Samples<'_>) -> f64 {
 }
 
 #[cfg(feature = "fit")]
-impl SvrParams {
-    fn check(&self) -> Result<()> {
-        if !(self.c > 0.0 && self.c.is_finite()) {
-            return Err(Error::param("C", format!("must be > 0, got {}", self.c)));
-        }
-        if !(self.epsilon >= 0.0 && self.epsilon.is_finite()) {
-            return Err(Error::param(
-                "epsilon",
-                format!("must be >= 0, got {}", self.epsilon),
-            ));
-        }
-        if !(self.tol > 0.0 && self.tol.is_finite()) {
-            return Err(Error::param(
-                "tol",
-                format!("must be > 0, got {}", self.tol),
-            ));
-        }
-        if !(self.cache_size > 0.0 && self.cache_size.is_finite()) {
-            return Err(Error::param(
-                "cache_size",
-                format!("must be > 0 MiB, got {}", self.cache_size),
-            ));
-        }
-        if let Gamma::Value(g) = self.gamma {
-            if !(g > 0.0 && g.is_finite()) {
-                return Err(Error::param("gamma", format!("must be > 0, got {g}")));
-            }
-        }
-        Ok(())
-    }
-
+impl SvrValidParams {
     /// The kernel these parameters give on `x` (γ resolved).
     pub fn kernel_for(&self, x: Samples<'_>) -> Kernel {
         match self.kernel {
@@ -244,8 +326,8 @@ impl SvrParams {
         }
     }
 
+    /// Solves the dual on the rows of `x` with targets `y`.
     pub fn fit(&self, x: Samples<'_>, y: &[f64]) -> Result<SvrModel> {
-        self.check()?;
         x.require_finite("X")?;
         check_target(y, x.nrows())?;
         let kernel = self.kernel_for(x);
@@ -1051,12 +1133,12 @@ mod tests {
     fn kkt_holds_at_the_solution() {
         let (x, y) = data(80);
         let s = Samples::new(&x, 80, 3).unwrap();
-        let params = SvrParams {
-            c: 3.0,
-            epsilon: 0.05,
-            tol: 1e-6,
-            ..Default::default()
-        };
+        let params = SvrParams::new()
+            .c(3.0)
+            .epsilon(0.05)
+            .tol(1e-6)
+            .check()
+            .unwrap();
         let m = params.fit(s, &y).unwrap();
         // Σβ = 0 and |β| ≤ C
         let sum: f64 = m.dual_coef.iter().sum();
@@ -1084,32 +1166,23 @@ mod tests {
     fn shrinking_and_tiny_cache_give_the_same_model() {
         let (x, y) = data(120);
         let s = Samples::new(&x, 120, 3).unwrap();
-        let base = SvrParams {
-            c: 10.0,
-            epsilon: 0.01,
-            tol: 1e-5,
-            ..Default::default()
-        };
-        let a = base.fit(s, &y).unwrap();
-        let b = SvrParams {
-            shrinking: false,
-            cache_size: 1e-4,
-            ..base.clone()
-        }
-        .fit(s, &y)
-        .unwrap();
+        let base = SvrParams::new().c(10.0).epsilon(0.01).tol(1e-5);
+        let a = base.clone().check().unwrap().fit(s, &y).unwrap();
+        let b = base
+            .clone()
+            .shrinking(false)
+            .cache_size(1e-4)
+            .check()
+            .unwrap()
+            .fit(s, &y)
+            .unwrap();
         let pa = a.predict(s).unwrap();
         let pb = b.predict(s).unwrap();
         for (u, v) in pa.iter().zip(&pb) {
             assert!((u - v).abs() < 1e-3, "{u} vs {v}");
         }
         // the cache size alone never changes a single bit
-        let c = SvrParams {
-            cache_size: 1e-4,
-            ..base
-        }
-        .fit(s, &y)
-        .unwrap();
+        let c = base.cache_size(1e-4).check().unwrap().fit(s, &y).unwrap();
         assert_eq!(a, c);
     }
 
@@ -1118,29 +1191,43 @@ mod tests {
         let (x, y) = data(10);
         let s = Samples::new(&x, 10, 3).unwrap();
         for p in [
-            SvrParams {
-                c: 0.0,
-                ..Default::default()
-            },
-            SvrParams {
-                epsilon: -1.0,
-                ..Default::default()
-            },
-            SvrParams {
-                gamma: Gamma::Value(f64::NAN),
-                ..Default::default()
-            },
+            SvrParams::new().c(0.0),
+            SvrParams::new().epsilon(-1.0),
+            SvrParams::new().gamma(Gamma::Value(f64::NAN)),
         ] {
-            assert!(p.fit(s, &y).is_err());
+            assert!(p.check().is_err());
         }
-        assert!(SvrParams::default().fit(s, &y[..9]).is_err());
+        let p = SvrParams::new().check().unwrap();
+        assert!(p.fit(s, &y[..9]).is_err());
+    }
+
+    #[test]
+    fn names_parse_as_serde_reads_them() {
+        crate::error::assert_names_agree(&KernelKind::NAMES);
+        for (n, g) in [("scale", Gamma::Scale), ("auto", Gamma::Auto)] {
+            assert_eq!(n.parse::<Gamma>().unwrap(), g);
+            assert_eq!(serde_json::to_string(&g).unwrap(), format!("{n:?}"));
+        }
+        let e = "wide".parse::<Gamma>().unwrap_err().to_string();
+        assert!(
+            e.contains("gamma") && e.contains(r#""scale", "auto""#),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn autotraits() {
+        fn is_send_sync<T: Send + Sync>() {}
+        is_send_sync::<SvrParams>();
+        is_send_sync::<SvrValidParams>();
+        is_send_sync::<SvrModel>();
     }
 
     #[test]
     fn model_json_round_trip() {
         let (x, y) = data(30);
         let s = Samples::new(&x, 30, 3).unwrap();
-        let m = SvrParams::default().fit(s, &y).unwrap();
+        let m = SvrParams::new().check().unwrap().fit(s, &y).unwrap();
         let back: SvrModel = serde_json::from_str(&serde_json::to_string(&m).unwrap()).unwrap();
         assert_eq!(m, back);
     }

@@ -136,8 +136,10 @@ fn split(x: Samples<'_>, y: &[f64], folds: &[Vec<usize>]) -> Vec<Fold> {
 }
 
 fn fold_mse(f: &Fold, d: usize, p: &SvrParams) -> f64 {
-    let fit = Samples::new(&f.x_train, f.y_train.len(), d)
-        .and_then(|xs| p.fit(xs, &f.y_train))
+    let fit = p
+        .clone()
+        .check()
+        .and_then(|p| p.fit(Samples::new(&f.x_train, f.y_train.len(), d)?, &f.y_train))
         .and_then(|m| {
             let xt = Samples::new(&f.x_test, f.y_test.len(), d)?;
             m.predict(xt)
@@ -168,12 +170,11 @@ pub fn cv_mse(x: Samples<'_>, y: &[f64], folds: &[Vec<usize>], p: &SvrParams) ->
 impl TuneParams {
     /// The fixed SVR parameters with this C and γ (RBF kernel).
     pub fn svr_at(&self, c: f64, gamma: f64) -> SvrParams {
-        SvrParams {
-            c,
-            gamma: Gamma::Value(gamma),
-            kernel: KernelKind::Rbf,
-            ..self.svr.clone()
-        }
+        self.svr
+            .clone()
+            .c(c)
+            .gamma(Gamma::Value(gamma))
+            .kernel(KernelKind::Rbf)
     }
 
     fn decode(&self, v: &[f64]) -> (f64, f64) {
@@ -249,7 +250,7 @@ pub fn tune_svr(
         ));
     }
     let (c, gamma) = params.decode(&res.x);
-    let model = params.svr_at(c, gamma).fit(x, y)?;
+    let model = params.svr_at(c, gamma).check()?.fit(x, y)?;
     Ok(TuneResult {
         c,
         gamma,

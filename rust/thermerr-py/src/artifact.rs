@@ -58,30 +58,9 @@ fn to_py(py: Python<'_>, m: Model) -> PyResult<Py<PyAny>> {
         Model::Mlr(inner) => Py::new(py, PyMlrModel { inner })?.into_any(),
         Model::Rbf(inner) => Py::new(py, PyRbfModel { inner })?.into_any(),
         Model::Svr(inner) => Py::new(py, PySvrModel { inner })?.into_any(),
-        Model::Bp(inner) => Py::new(
-            py,
-            PyBpModel {
-                inner,
-                history: Vec::new(),
-            },
-        )?
-        .into_any(),
-        Model::GreyBp(inner) | Model::Gm1n(inner) => Py::new(
-            py,
-            PyGreyModel {
-                inner,
-                history: Vec::new(),
-            },
-        )?
-        .into_any(),
-        Model::Hybrid(inner) => Py::new(
-            py,
-            PyHybridModel {
-                inner,
-                history: Vec::new(),
-            },
-        )?
-        .into_any(),
+        Model::Bp(inner) => Py::new(py, PyBpModel { inner })?.into_any(),
+        Model::GreyBp(inner) | Model::Gm1n(inner) => Py::new(py, PyGreyModel { inner })?.into_any(),
+        Model::Hybrid(inner) => Py::new(py, PyHybridModel { inner })?.into_any(),
     })
 }
 

@@ -2,124 +2,70 @@
 
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
-use thermerr_core::grey::{GmWork, GreyBpModel, GreyBpParams};
-use thermerr_core::nn::{Act, BpModel, MlpParams, Trainer};
+use thermerr_core::grey::{Gm1nParams, GmWork, GreyBpModel, GreyBpParams};
+use thermerr_core::nn::{BpModel, BpParams};
 use thermerr_core::Error;
 
+use crate::params::{net, parse, Given};
 use crate::{samples, slice1, vec_to_py, PyErrWrap};
-
-fn act(name: &str, what: &'static str) -> PyResult<Act> {
-    match name {
-        "sigmoid" => Ok(Act::Sigmoid),
-        "tanh" => Ok(Act::Tanh),
-        "linear" => Ok(Act::Linear),
-        other => Err(PyErrWrap(Error::InvalidParam {
-            name: what,
-            reason: format!("must be \"sigmoid\", \"tanh\" or \"linear\", got {other:?}"),
-        })
-        .into()),
-    }
-}
-
-/// Network and trainer parameters from the flat keywords the Python estimators pass.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn mlp_params(
-    hidden: Vec<usize>,
-    hidden_act: &str,
-    output_act: &str,
-    output_scale: f64,
-    init: f64,
-    trainer: &str,
-    lr: f64,
-    momentum: f64,
-    max_epochs: usize,
-    goal: f64,
-    patience: usize,
-    seed: u64,
-) -> PyResult<MlpParams> {
-    let trainer = match trainer {
-        "seed" | "gd" => Trainer::Gd {
-            lr,
-            momentum,
-            max_epochs,
-            goal,
-        },
-        "adam" => Trainer::Adam {
-            lr,
-            max_epochs,
-            goal,
-            patience,
-        },
-        other => {
-            return Err(PyErrWrap(Error::InvalidParam {
-                name: "trainer",
-                reason: format!("must be \"seed\" or \"adam\", got {other:?}"),
-            })
-            .into())
-        }
-    };
-    Ok(MlpParams {
-        hidden_sizes: hidden,
-        hidden: act(hidden_act, "hidden_activation")?,
-        output: act(output_act, "output_activation")?,
-        output_scale,
-        init,
-        trainer,
-        seed,
-    })
-}
 
 /// A fitted rolling GM(1,N) (+ BP) model.
 #[pyclass(frozen, module = "thermerr_rs._core", name = "GreyModel")]
 pub struct PyGreyModel {
     pub(crate) inner: GreyBpModel,
-    pub(crate) history: Vec<f64>,
 }
 
 #[pymethods]
 impl PyGreyModel {
-    /// `net=False` fits the first window's GM alone.
     #[staticmethod]
-    #[pyo3(signature = (x, y, *, windows, net = true, hidden = 7, trainer = "seed", lr = 0.01, momentum = 0.9, max_epochs = 8000, goal = 0.01, patience = 500, init = 1.0, seed = 0))]
+    #[pyo3(signature = (x, y, *, windows = None, hidden = None, trainer = None, lr = None, momentum = None, max_epochs = None, goal = None, patience = None, init = None, seed = None))]
     #[allow(clippy::too_many_arguments)]
     fn fit(
         py: Python<'_>,
         x: PyReadonlyArray2<'_, f64>,
         y: PyReadonlyArray1<'_, f64>,
-        windows: Vec<usize>,
-        net: bool,
-        hidden: usize,
-        trainer: &str,
-        lr: f64,
-        momentum: f64,
-        max_epochs: usize,
-        goal: f64,
-        patience: usize,
-        init: f64,
-        seed: u64,
+        windows: Option<Vec<usize>>,
+        hidden: Option<usize>,
+        trainer: Option<&str>,
+        lr: Option<f64>,
+        momentum: Option<f64>,
+        max_epochs: Option<usize>,
+        goal: Option<f64>,
+        patience: Option<usize>,
+        init: Option<f64>,
+        seed: Option<u64>,
     ) -> PyResult<Self> {
-        let np = if net {
-            Some(mlp_params(
-                vec![hidden],
-                "sigmoid",
-                "linear",
-                1.0,
-                init,
-                trainer,
-                lr,
-                momentum,
-                max_epochs,
-                goal,
-                patience,
-                seed,
-            )?)
-        } else {
-            None
-        };
-        let params = GreyBpParams { windows, net: np };
+        let trainer = parse(trainer)?;
+        let params = GreyBpParams::new()
+            .given(windows, GreyBpParams::windows)
+            .net(|p| {
+                let hidden = hidden.map(|h| vec![h]);
+                net(
+                    p, hidden, trainer, lr, momentum, max_epochs, goal, patience, init, seed,
+                )
+            });
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
-        let (inner, history) = py.detach(|| params.fit(xs, ys)).map_err(PyErrWrap)?;
-        Ok(PyGreyModel { inner, history })
+        let inner = py
+            .detach(|| params.check()?.fit(xs, ys))
+            .map_err(PyErrWrap)?;
+        Ok(PyGreyModel { inner })
+    }
+
+    /// The GM(1,N) of one window alone (seed 002's "GM").
+    #[staticmethod]
+    #[pyo3(signature = (x, y, *, window = None))]
+    fn fit_gm1n(
+        py: Python<'_>,
+        x: PyReadonlyArray2<'_, f64>,
+        y: PyReadonlyArray1<'_, f64>,
+        window: Option<usize>,
+    ) -> PyResult<Self> {
+        let params = Gm1nParams::new().given(window, Gm1nParams::window);
+        let (xs, ys) = (samples(&x)?, slice1(&y)?);
+        let inner = py
+            .detach(|| params.check()?.fit(xs, ys))
+            .map_err(PyErrWrap)?;
+        Ok(PyGreyModel { inner })
     }
 
     /// Closed loop, or one step ahead from the measured errors `y` (y[k−1] enters at step k).
@@ -142,7 +88,7 @@ impl PyGreyModel {
 
     #[getter]
     fn history<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec_to_py(py, self.history.clone())
+        vec_to_py(py, self.inner.history.clone())
     }
 
     #[getter]
@@ -183,35 +129,44 @@ fn gm1n_window<'py>(
 #[pyclass(frozen, module = "thermerr_rs._core", name = "BpModel")]
 pub struct PyBpModel {
     pub(crate) inner: BpModel,
-    pub(crate) history: Vec<f64>,
 }
 
 #[pymethods]
 impl PyBpModel {
     #[staticmethod]
-    #[pyo3(signature = (x, y, *, hidden = vec![7], trainer = "seed", lr = 0.01, momentum = 0.9, max_epochs = 8000, goal = 0.01, patience = 500, init = 1.0, seed = 0))]
+    #[pyo3(signature = (x, y, *, hidden = None, trainer = None, lr = None, momentum = None, max_epochs = None, goal = None, patience = None, init = None, seed = None))]
     #[allow(clippy::too_many_arguments)]
     fn fit(
         py: Python<'_>,
         x: PyReadonlyArray2<'_, f64>,
         y: PyReadonlyArray1<'_, f64>,
-        hidden: Vec<usize>,
-        trainer: &str,
-        lr: f64,
-        momentum: f64,
-        max_epochs: usize,
-        goal: f64,
-        patience: usize,
-        init: f64,
-        seed: u64,
+        hidden: Option<Vec<usize>>,
+        trainer: Option<&str>,
+        lr: Option<f64>,
+        momentum: Option<f64>,
+        max_epochs: Option<usize>,
+        goal: Option<f64>,
+        patience: Option<usize>,
+        init: Option<f64>,
+        seed: Option<u64>,
     ) -> PyResult<Self> {
-        let p = mlp_params(
-            hidden, "sigmoid", "linear", 1.0, init, trainer, lr, momentum, max_epochs, goal,
-            patience, seed,
-        )?;
+        let params = net(
+            BpParams::new(),
+            hidden,
+            parse(trainer)?,
+            lr,
+            momentum,
+            max_epochs,
+            goal,
+            patience,
+            init,
+            seed,
+        );
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
-        let (inner, history) = py.detach(|| p.fit_bp(xs, ys)).map_err(PyErrWrap)?;
-        Ok(PyBpModel { inner, history })
+        let inner = py
+            .detach(|| params.check()?.fit(xs, ys))
+            .map_err(PyErrWrap)?;
+        Ok(PyBpModel { inner })
     }
 
     fn predict<'py>(
@@ -226,7 +181,7 @@ impl PyBpModel {
 
     #[getter]
     fn history<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec_to_py(py, self.history.clone())
+        vec_to_py(py, self.inner.history.clone())
     }
 
     #[getter]

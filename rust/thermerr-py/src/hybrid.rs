@@ -2,84 +2,60 @@
 
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
-use thermerr_core::hybrid::{HybridModel, HybridParams, Variant};
-use thermerr_core::Error;
+use thermerr_core::hybrid::{HybridModel, HybridParams};
 
-use crate::grey::mlp_params;
+use crate::params::{net, parse, Given};
 use crate::{samples, slice1, vec_to_py, PyErrWrap};
 
 /// A fitted filter model (the Python `HybridFilterNet` holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "HybridModel")]
 pub struct PyHybridModel {
     pub(crate) inner: HybridModel,
-    pub(crate) history: Vec<f64>,
 }
 
 #[pymethods]
 impl PyHybridModel {
     #[staticmethod]
-    #[pyo3(signature = (x, y, *, starts = Vec::new(), variant = "hybrid", ma_lags = 1, ar_lags = 2, c_y = 0.02, limit = 50.0, hidden = 30, trainer = "adam", lr = 0.01, momentum = 0.9, max_epochs = 10000, goal = 0.0, patience = 500, init = 0.5, seed = 0))]
+    #[pyo3(signature = (x, y, *, starts = Vec::new(), variant = None, ma_lags = None, ar_lags = None, c_y = None, limit = None, hidden = None, trainer = None, lr = None, momentum = None, max_epochs = None, goal = None, patience = None, init = None, seed = None))]
     #[allow(clippy::too_many_arguments)]
     fn fit(
         py: Python<'_>,
         x: PyReadonlyArray2<'_, f64>,
         y: PyReadonlyArray1<'_, f64>,
         starts: Vec<usize>,
-        variant: &str,
-        ma_lags: usize,
-        ar_lags: usize,
-        c_y: f64,
-        limit: f64,
-        hidden: usize,
-        trainer: &str,
-        lr: f64,
-        momentum: f64,
-        max_epochs: usize,
-        goal: f64,
-        patience: usize,
-        init: f64,
-        seed: u64,
+        variant: Option<&str>,
+        ma_lags: Option<usize>,
+        ar_lags: Option<usize>,
+        c_y: Option<f64>,
+        limit: Option<f64>,
+        hidden: Option<usize>,
+        trainer: Option<&str>,
+        lr: Option<f64>,
+        momentum: Option<f64>,
+        max_epochs: Option<usize>,
+        goal: Option<f64>,
+        patience: Option<usize>,
+        init: Option<f64>,
+        seed: Option<u64>,
     ) -> PyResult<Self> {
-        let variant = match variant {
-            "hybrid" => Variant::Hybrid,
-            "arma" => Variant::Arma,
-            "lrnn" => Variant::LrNn,
-            "fnn" => Variant::Fnn,
-            other => {
-                return Err(PyErrWrap(Error::InvalidParam {
-                    name: "variant",
-                    reason: format!(
-                        "must be \"hybrid\", \"arma\", \"lrnn\" or \"fnn\", got {other:?}"
-                    ),
-                })
-                .into())
-            }
-        };
-        let net = mlp_params(
-            vec![hidden],
-            "tanh",
-            "tanh",
-            1.0,
-            init,
-            trainer,
-            lr,
-            momentum,
-            max_epochs,
-            goal,
-            patience,
-            seed,
-        )?;
-        let p = HybridParams {
-            variant,
-            ma_lags,
-            ar_lags,
-            c_y,
-            limit,
-            net,
-        };
+        let trainer = parse(trainer)?;
+        let params = HybridParams::new()
+            .given(parse(variant)?, HybridParams::variant)
+            .given(ma_lags, HybridParams::ma_lags)
+            .given(ar_lags, HybridParams::ar_lags)
+            .given(c_y, HybridParams::c_y)
+            .given(limit, HybridParams::limit)
+            .net(|p| {
+                let hidden = hidden.map(|h| vec![h]);
+                net(
+                    p, hidden, trainer, lr, momentum, max_epochs, goal, patience, init, seed,
+                )
+            });
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
-        let (inner, history) = py.detach(|| p.fit(xs, ys, &starts)).map_err(PyErrWrap)?;
-        Ok(PyHybridModel { inner, history })
+        let inner = py
+            .detach(|| params.check()?.fit(xs, ys, &starts))
+            .map_err(PyErrWrap)?;
+        Ok(PyHybridModel { inner })
     }
 
     /// Closed loop, or one step ahead from the measured errors `y` (y[k−1] enters at step k).
@@ -107,7 +83,7 @@ impl PyHybridModel {
 
     #[getter]
     fn history<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
-        vec_to_py(py, self.history.clone())
+        vec_to_py(py, self.inner.history.clone())
     }
 
     #[getter]

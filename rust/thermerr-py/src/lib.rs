@@ -7,6 +7,7 @@ mod fcm;
 mod grey;
 mod hybrid;
 mod linear;
+mod params;
 mod rbf;
 mod run;
 mod svr;
@@ -82,5 +83,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     swarm::register(m)?;
     grey::register(m)?;
     hybrid::register(m)?;
+    params::register(m)?;
     Ok(())
 }

@@ -4,6 +4,7 @@ use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use thermerr_core::linear::{LinearRegression, MlrParams};
 
+use crate::params::Given;
 use crate::{samples, slice1, vec_to_py, PyErrWrap};
 
 /// A fitted linear model (the Python `MLR` estimator holds one).
@@ -15,16 +16,17 @@ pub struct PyMlrModel {
 #[pymethods]
 impl PyMlrModel {
     #[staticmethod]
-    #[pyo3(signature = (x, y, *, fit_intercept = true))]
+    #[pyo3(signature = (x, y, *, fit_intercept = None))]
     fn fit(
         py: Python<'_>,
         x: PyReadonlyArray2<'_, f64>,
         y: PyReadonlyArray1<'_, f64>,
-        fit_intercept: bool,
+        fit_intercept: Option<bool>,
     ) -> PyResult<Self> {
+        let params = MlrParams::new().given(fit_intercept, MlrParams::fit_intercept);
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
         let inner = py
-            .detach(|| MlrParams { fit_intercept }.fit(xs, ys))
+            .detach(|| params.check()?.fit(xs, ys))
             .map_err(PyErrWrap)?;
         Ok(PyMlrModel { inner })
     }

@@ -3,9 +3,10 @@
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use thermerr_core::kmeans::kmeans as core_kmeans;
-use thermerr_core::rbf::{Design, RbfNetwork, RbfParams, Rule};
-use thermerr_core::{Error, Matrix};
+use thermerr_core::rbf::{RbfNetwork, RbfParams};
+use thermerr_core::Matrix;
 
+use crate::params::{parse, Given};
 use crate::{matrix_to_py, samples, slice1, vec_to_py, PyErrWrap};
 
 /// A fitted RBF network (the Python `RBFNetwork` holds one).
@@ -17,54 +18,32 @@ pub struct PyRbfModel {
 #[pymethods]
 impl PyRbfModel {
     #[staticmethod]
-    #[pyo3(signature = (x, y, *, design = "exact", spread = 1.0, goal = 0.0, max_neurons = None, n_centers = None, seed = None, rule = "ols"))]
+    #[pyo3(signature = (x, y, *, design = None, spread = None, goal = None, max_neurons = None, n_centers = None, seed = None, rule = None))]
     #[allow(clippy::too_many_arguments)]
     fn fit(
         py: Python<'_>,
         x: PyReadonlyArray2<'_, f64>,
         y: PyReadonlyArray1<'_, f64>,
-        design: &str,
-        spread: f64,
-        goal: f64,
+        design: Option<&str>,
+        spread: Option<f64>,
+        goal: Option<f64>,
         max_neurons: Option<usize>,
         n_centers: Option<usize>,
         seed: Option<u64>,
-        rule: &str,
+        rule: Option<&str>,
     ) -> PyResult<Self> {
-        let design = match design {
-            "exact" => Design::Exact,
-            "ols" => Design::Ols,
-            "kmeans" => Design::KMeans,
-            other => {
-                return Err(PyErrWrap(Error::InvalidParam {
-                    name: "design",
-                    reason: format!("must be \"exact\", \"ols\" or \"kmeans\", got {other:?}"),
-                })
-                .into())
-            }
-        };
-        let rule = match rule {
-            "ols" => Rule::Ols,
-            "max_error" => Rule::MaxError,
-            other => {
-                return Err(PyErrWrap(Error::InvalidParam {
-                    name: "rule",
-                    reason: format!("must be \"ols\" or \"max_error\", got {other:?}"),
-                })
-                .into())
-            }
-        };
+        let params = RbfParams::new()
+            .given(parse(design)?, RbfParams::design)
+            .given(spread, RbfParams::spread)
+            .given(goal, RbfParams::goal)
+            .max_neurons(max_neurons)
+            .n_centers(n_centers)
+            .seed(seed)
+            .given(parse(rule)?, RbfParams::rule);
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
-        let params = RbfParams {
-            design,
-            spread,
-            goal,
-            max_neurons,
-            n_centers,
-            seed,
-            rule,
-        };
-        let inner = py.detach(|| params.fit(xs, ys)).map_err(PyErrWrap)?;
+        let inner = py
+            .detach(|| params.check()?.fit(xs, ys))
+            .map_err(PyErrWrap)?;
         Ok(PyRbfModel { inner })
     }
 

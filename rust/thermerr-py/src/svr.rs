@@ -2,9 +2,9 @@
 
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
-use thermerr_core::svr::{Gamma, Kernel, KernelKind, SvrModel, SvrParams};
-use thermerr_core::Error;
+use thermerr_core::svr::{Gamma, Kernel, SvrModel, SvrParams};
 
+use crate::params::{parse, Given};
 use crate::{matrix_to_py, samples, slice1, vec_to_py, PyErrWrap};
 
 /// `gamma` as scikit-learn takes it: "scale", "auto" or a positive number.
@@ -14,30 +14,12 @@ pub(crate) enum GammaArg {
     Value(f64),
 }
 
-pub(crate) fn parse_gamma(g: GammaArg) -> PyResult<Gamma> {
-    match g {
-        GammaArg::Value(v) => Ok(Gamma::Value(v)),
-        GammaArg::Name(s) => match s.as_str() {
-            "scale" => Ok(Gamma::Scale),
-            "auto" => Ok(Gamma::Auto),
-            other => Err(PyErrWrap(Error::InvalidParam {
-                name: "gamma",
-                reason: format!("must be \"scale\", \"auto\" or a positive number, got {other:?}"),
-            })
-            .into()),
-        },
-    }
-}
-
-pub(crate) fn parse_kernel(k: &str) -> PyResult<KernelKind> {
-    match k {
-        "rbf" => Ok(KernelKind::Rbf),
-        "linear" => Ok(KernelKind::Linear),
-        other => Err(PyErrWrap(Error::InvalidParam {
-            name: "kernel",
-            reason: format!("must be \"rbf\" or \"linear\", got {other:?}"),
-        })
-        .into()),
+impl GammaArg {
+    fn gamma(self) -> PyResult<Gamma> {
+        match self {
+            GammaArg::Value(v) => Ok(Gamma::Value(v)),
+            GammaArg::Name(s) => Ok(s.parse().map_err(PyErrWrap)?),
+        }
     }
 }
 
@@ -50,33 +32,34 @@ pub struct PySvrModel {
 #[pymethods]
 impl PySvrModel {
     #[staticmethod]
-    #[pyo3(signature = (x, y, *, c = 1.0, epsilon = 0.1, kernel = "rbf", gamma = GammaArg::Name("scale".into()), tol = 1e-3, shrinking = true, cache_size = 200.0, max_iter = None))]
+    #[pyo3(signature = (x, y, *, c = None, epsilon = None, kernel = None, gamma = None, tol = None, shrinking = None, cache_size = None, max_iter = None))]
     #[allow(clippy::too_many_arguments)]
     fn fit(
         py: Python<'_>,
         x: PyReadonlyArray2<'_, f64>,
         y: PyReadonlyArray1<'_, f64>,
-        c: f64,
-        epsilon: f64,
-        kernel: &str,
-        gamma: GammaArg,
-        tol: f64,
-        shrinking: bool,
-        cache_size: f64,
+        c: Option<f64>,
+        epsilon: Option<f64>,
+        kernel: Option<&str>,
+        gamma: Option<GammaArg>,
+        tol: Option<f64>,
+        shrinking: Option<bool>,
+        cache_size: Option<f64>,
         max_iter: Option<usize>,
     ) -> PyResult<Self> {
-        let params = SvrParams {
-            c,
-            epsilon,
-            kernel: parse_kernel(kernel)?,
-            gamma: parse_gamma(gamma)?,
-            tol,
-            shrinking,
-            cache_size,
-            max_iter,
-        };
+        let params = SvrParams::new()
+            .given(c, SvrParams::c)
+            .given(epsilon, SvrParams::epsilon)
+            .given(parse(kernel)?, SvrParams::kernel)
+            .given(gamma.map(GammaArg::gamma).transpose()?, SvrParams::gamma)
+            .given(tol, SvrParams::tol)
+            .given(shrinking, SvrParams::shrinking)
+            .given(cache_size, SvrParams::cache_size)
+            .max_iter(max_iter);
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
-        let inner = py.detach(|| params.fit(xs, ys)).map_err(PyErrWrap)?;
+        let inner = py
+            .detach(|| params.check()?.fit(xs, ys))
+            .map_err(PyErrWrap)?;
         Ok(PySvrModel { inner })
     }
 

@@ -211,13 +211,11 @@ fn svr_cv_mse(
     tol: f64,
 ) -> PyResult<f64> {
     let (xs, ys) = (samples(&x)?, slice1(&y)?);
-    let p = SvrParams {
-        c,
-        epsilon,
-        tol,
-        gamma: thermerr_core::svr::Gamma::Value(gamma),
-        ..Default::default()
-    };
+    let p = SvrParams::new()
+        .c(c)
+        .epsilon(epsilon)
+        .tol(tol)
+        .gamma(thermerr_core::svr::Gamma::Value(gamma));
     Ok(py
         .detach(|| tune::cv_mse(xs, ys, &folds, &p))
         .map_err(PyErrWrap)?)
@@ -271,11 +269,7 @@ fn tune_svr(
         }
     };
     let tp = TuneParams {
-        svr: SvrParams {
-            epsilon,
-            tol,
-            ..Default::default()
-        },
+        svr: SvrParams::new().epsilon(epsilon).tol(tol),
         c_bounds,
         gamma_bounds,
         scale,
