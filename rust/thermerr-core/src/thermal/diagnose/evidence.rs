@@ -85,13 +85,13 @@ pub fn unnamed(
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::{candidate, holdout};
+    use super::super::tests::{baseline, candidate};
     use super::*;
     use crate::thermal::diagnose::Cause;
 
     #[test]
     fn says_cuts_only_when_the_error_is_cut() {
-        let base = holdout(2.55);
+        let base = baseline();
         let better = candidate(Cause::ThermalLag, 0.6, 1.0, -50.0);
         let s = named(std::slice::from_ref(&better), 0, &base, "E_z");
         assert!(
@@ -114,7 +114,7 @@ mod tests {
 
     #[test]
     fn a_named_runner_up_is_not_called_the_best_of_all() {
-        let base = holdout(2.55);
+        let base = baseline();
         let cands = [
             candidate(Cause::UnmodeledSource, 0.45, 6.81, -400.0),
             candidate(Cause::ThermalLag, 0.2, 2.0, -30.0),

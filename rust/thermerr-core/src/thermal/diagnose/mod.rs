@@ -297,11 +297,15 @@ pub(crate) mod tests {
     /// The baseline held-out RMS of the constructed candidates.
     const BASE_RMSE: f64 = 2.55;
 
-    pub fn holdout(rmse_um: f64) -> Holdout {
+    fn holdout(rmse_um: f64) -> Holdout {
         Holdout {
             rmse_um,
             ..Holdout::default()
         }
+    }
+
+    pub fn baseline() -> Holdout {
+        holdout(BASE_RMSE)
     }
 
     /// A scored candidate against a baseline of [`BASE_RMSE`] µm.
@@ -311,14 +315,13 @@ pub(crate) mod tests {
             "one.toml",
         )
         .unwrap();
-        let base = holdout(BASE_RMSE);
         let holdout = holdout(rmse_um);
         Candidate {
             cause,
             column: None,
             node: None,
             score,
-            gain_pct: score::gain_pct(&base, &holdout),
+            gain_pct: score::gain_pct(&baseline(), &holdout),
             delta_bic,
             sensor_gain_pct: None,
             holdout,

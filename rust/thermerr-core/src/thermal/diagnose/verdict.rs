@@ -67,12 +67,12 @@ pub fn rule(
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::{candidate, holdout};
+    use super::super::tests::{baseline, candidate};
     use super::*;
 
     #[test]
     fn names_the_best_supported_candidate() {
-        let base = holdout(2.55);
+        let base = baseline();
         let cands = [
             candidate(Cause::ThermalLag, 0.6, 1.0, -50.0),
             candidate(Cause::SensorDrift, 0.3, 2.0, -50.0),
@@ -87,7 +87,7 @@ mod tests {
     #[test]
     fn never_names_a_cause_that_raises_the_error() {
         // the kJ/K machine: the joint residual falls, the error axis gets worse
-        let base = holdout(2.55);
+        let base = baseline();
         let worse = candidate(Cause::UnmodeledSource, 0.45, 6.81, -400.0);
         let opts = DiagnoseOptions::default();
         assert_eq!(
@@ -108,13 +108,24 @@ mod tests {
 
     #[test]
     fn needs_the_bic_and_the_score() {
-        let base = holdout(2.55);
+        let base = baseline();
         let opts = DiagnoseOptions::default();
         for c in [
             candidate(Cause::ThermalLag, 0.5, 1.0, -5.0),
             candidate(Cause::ThermalLag, 0.05, 1.0, -50.0),
         ] {
             assert_eq!(rule(&[c], &base, 0.1, &opts).0, Verdict::Unexplained);
+        }
+    }
+
+    #[test]
+    fn serialises_as_its_name() {
+        for (v, name) in [
+            (Verdict::Cause(Cause::SpeedGrowth), "\"speed_growth\""),
+            (Verdict::None, "\"none\""),
+            (Verdict::Unexplained, "\"unexplained\""),
+        ] {
+            assert_eq!(serde_json::to_string(&v).unwrap(), name);
         }
     }
 }
