@@ -8,11 +8,11 @@ from typing import Any
 import numpy as np
 
 from ._arrays import F64, as_matrix
-from .base import _WRAPPERS, Estimator, _from_dict
+from .base import _WRAPPERS, Estimator, Regressor, _from_dict
 from .errors import DataError
 
 
-class MinMaxScaled(Estimator):
+class MinMaxScaled(Regressor):
     """``estimator`` fitted on inputs min–max scaled to [0, 1] by the training ranges.
 
     MATLAB users know this as ``mapminmax`` before ``newrb``: RBF spreads are then comparable
@@ -25,7 +25,6 @@ class MinMaxScaled(Estimator):
 
     def __init__(self, estimator: Estimator) -> None:
         self.estimator = estimator
-        self._inner: Any = None
 
     def _fit(self, x: F64, y: F64) -> None:
         lo, hi = x.min(axis=0), x.max(axis=0)
@@ -40,7 +39,7 @@ class MinMaxScaled(Estimator):
         return np.ascontiguousarray((x - self.x_min_) / (self.x_max_ - self.x_min_))
 
     def _predict(self, x: F64) -> F64:
-        return self.estimator.predict(self._scale(x))
+        return self._inner._predict_columns(self._scale(x))
 
     def to_dict(self) -> dict[str, Any]:
         self._check_fitted()

@@ -11,9 +11,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from sklearn.base import MetaEstimatorMixin, clone
 
 from ._arrays import F64, as_matrix, as_vector
-from .base import _WRAPPERS, Estimator
+from .base import _WRAPPERS, Estimator, SequenceModel
 from .errors import DataError, ParameterError
 
 
@@ -50,13 +51,16 @@ class MinMaxAGO:
         return iago(x1) * (self.hi - self.lo) + self.lo
 
 
-class AGORegressor(Estimator):
-    """Wraps an estimator with seed 001's transform: it is fitted on the normalised, accumulated
-    inputs and target, and predicts by IAGO and de-normalisation.
+class AGORegressor(MetaEstimatorMixin, SequenceModel):  # type: ignore[misc]
+    """Wraps an estimator with seed 001's transform: a clone of ``estimator`` (the estimator
+    passed is left untouched) is fitted on the normalised, accumulated inputs and target, and
+    predicts by IAGO and de-normalisation.
 
     The accumulation runs over time, so ``predict`` needs a contiguous sequence of samples from
     the start of a run. The file written by ``save`` is the inner estimator's, with
     ``"preprocessing": {"kind": "minmax_ago", "x_min", "x_max", "y_min", "y_max"}``.
+
+    Fitted attributes: ``estimator_`` (the fitted clone), ``x_tf_``, ``y_tf_`` (the transforms).
     """
 
     kind = ""
@@ -64,22 +68,29 @@ class AGORegressor(Estimator):
 
     def __init__(self, estimator: Estimator) -> None:
         self.estimator = estimator
-        self._inner: Any = None
+
+    @property
+    def estimator_(self) -> Estimator:
+        """The fitted clone of ``estimator``."""
+        self._check_fitted()
+        inner: Estimator = self._inner
+        return inner
 
     def _fit(self, x: F64, y: F64) -> None:
         self.x_tf_ = MinMaxAGO.fit(x)
         self.y_tf_ = MinMaxAGO.fit(y)
-        self.estimator.fit(np.ascontiguousarray(self.x_tf_.transform(x)), self.y_tf_.transform(y))
-        self._inner = self.estimator
+        inner = clone(self.estimator)
+        inner.fit(np.ascontiguousarray(self.x_tf_.transform(x)), self.y_tf_.transform(y))
+        self._inner = inner
 
     def _predict(self, x: F64) -> F64:
-        y1 = self.estimator.predict(np.ascontiguousarray(self.x_tf_.transform(x)))
+        y1 = self._inner._predict_columns(np.ascontiguousarray(self.x_tf_.transform(x)))
         out: F64 = self.y_tf_.inverse(y1)
         return out
 
     def to_dict(self) -> dict[str, Any]:
         self._check_fitted()
-        doc = self.estimator.to_dict()
+        doc = self._inner.to_dict()
         doc.update(features=self.feature_names_in_, target=self.target_name_, inputs=self.inputs_)
         doc["preprocessing"] = {
             "kind": self.preprocessing_kind,
