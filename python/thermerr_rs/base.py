@@ -14,11 +14,11 @@ from pathlib import Path
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
-from sklearn.base import BaseEstimator, ClusterMixin, RegressorMixin
+from sklearn.base import BaseEstimator, ClusterMixin, MetaEstimatorMixin, RegressorMixin
 
 from ._arrays import F64, as_matrix, as_target, check_features, feature_names, series_name
 from ._io import write_atomic
-from .errors import ModelFormatError, NotFittedError, ParameterError
+from .errors import ModelFormatError, NotFittedError, ParameterError, ShapeError
 
 #: Schema version of the model files this library writes and reads.
 FORMAT_VERSION = 1
@@ -52,10 +52,6 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
     #: ``check_estimator(expected_failed_checks=...)`` on scikit-learn >= 1.6, and the
     #: ``_xfail_checks`` tag before
     _xfail_checks: ClassVar[dict[str, str]] = {}
-    #: scikit-learn's "poor_score" tag: the estimator is not expected to score well on its checks'
-    #: random, unordered data
-    _poor_score: ClassVar[bool] = False
-
     def __init_subclass__(cls, **kw: Any) -> None:
         super().__init_subclass__(**kw)
         if cls.kind:
@@ -70,14 +66,13 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         super().set_params(**params)
         return self
 
-    def __sklearn_tags__(self) -> Any:  # scikit-learn >= 1.6
-        tags = super().__sklearn_tags__()
-        if tags.regressor_tags is not None:
-            tags.regressor_tags.poor_score = self._poor_score
-        return tags
+    # tags: scikit-learn >= 1.6 reads __sklearn_tags__ (and takes the expected failures as
+    # check_estimator's expected_failed_checks), older releases merge the _more_tags of each class
+    def __sklearn_tags__(self) -> Any:
+        return super().__sklearn_tags__()
 
-    def _more_tags(self) -> dict[str, Any]:  # scikit-learn < 1.6
-        return {"_xfail_checks": dict(self._xfail_checks), "poor_score": self._poor_score}
+    def _more_tags(self) -> dict[str, Any]:
+        return {"_xfail_checks": dict(self._xfail_checks)}
 
     def __sklearn_is_fitted__(self) -> bool:
         return self._inner is not None
@@ -91,6 +86,10 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         """Check ``X`` and ``y``, fit, and record what the model was fitted on."""
         x = as_matrix(X, one_d=False)
         yv = as_target(y, x.shape[0], type(self).__name__)
+        n_min = self._min_samples()
+        if x.shape[0] < n_min:
+            raise ShapeError(f"{type(self).__name__} needs at least {n_min} samples to fit, "
+                             f"got n_samples = {x.shape[0]}")
         self._fit(x, yv, **fit_kw)
         return self._fitted_on(x, names, target, inputs)
 
@@ -143,6 +142,10 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
             raise NotFittedError(f"this {type(self).__name__} is not fitted yet: call fit first")
 
     # subclass hooks
+    def _min_samples(self) -> int:
+        """The fewest samples ``fit`` can work with (checked before fitting)."""
+        return 1
+
     def _fit(self, x: F64, y: F64) -> None:
         raise NotImplementedError
 
@@ -206,6 +209,18 @@ class Regressor(RegressorMixin, Estimator):  # type: ignore[misc]
     """Base of the regressors: ``fit(X, y)``, ``predict(X)``, ``score`` (R²), and ``fit_run`` /
     ``predict_run`` on the columns of a :class:`thermerr_rs.Run`."""
 
+    #: scikit-learn's ``poor_score`` tag: not expected to score well on the random, unordered
+    #: data of scikit-learn's checks
+    _poor_score: ClassVar[bool] = False
+
+    def __sklearn_tags__(self) -> Any:
+        tags = super().__sklearn_tags__()
+        tags.regressor_tags.poor_score = self._poor_score
+        return tags
+
+    def _more_tags(self) -> dict[str, Any]:
+        return {"poor_score": self._poor_score}
+
 
 class SequenceModel(Regressor):
     """Base of the regressors of a time-ordered series: the prediction of a sample depends on
@@ -223,6 +238,17 @@ class SequenceModel(Regressor):
         "on the samples before it, so predicting one sample at a time changes it",
     }
     _poor_score: ClassVar[bool] = True
+
+
+class _Wrapper(MetaEstimatorMixin):  # type: ignore[misc]
+    """Mixin of the estimators that wrap another (its parameters show as ``estimator__...``)."""
+
+    def __getstate__(self) -> dict[str, Any]:
+        # unfitted, the state is the parameters given to __init__ (the nested ones are not)
+        if getattr(self, "_inner", None) is None:
+            return {"params": self.get_params(deep=False)}
+        state: dict[str, Any] = super().__getstate__()
+        return state
 
 
 class Clusterer(ClusterMixin, Estimator):  # type: ignore[misc]

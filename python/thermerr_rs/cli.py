@@ -148,7 +148,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({"axis": target, **s.as_dict()}, indent=1))
     else:
-        inner: Estimator = getattr(model, "estimator", model)
+        wrapped = getattr(model, "estimator", None)  # the model inside a preprocessing wrapper
+        inner = wrapped if isinstance(wrapped, Estimator) else model
         pre = f" ({type(model).__name__})" if inner is not model else ""
         print(f"{inner.kind} model{pre} {args.model} on {run.source}, axis {target}:")
         print("  " + str(s).replace("\n", "\n  "))

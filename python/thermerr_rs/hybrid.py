@@ -53,6 +53,9 @@ class HybridFilterNet(_Sequential):
         return self._fit_checked(X, y, names=feature_names(X), target=series_name(y),
                                  starts=starts)
 
+    def _min_samples(self) -> int:
+        return max(int(self.ma_lags), int(self.ar_lags)) + 1  # one sample past the longest lag
+
     def _fit(self, x: F64, y: F64, starts: list[int] | None = None) -> None:
         if self.trainer not in ("seed", "adam"):
             raise ParameterError(f'trainer must be "seed" or "adam", got {self.trainer!r}')

@@ -23,6 +23,9 @@ class MLR(Regressor):
     def __init__(self, *, fit_intercept: bool = True) -> None:
         self.fit_intercept = fit_intercept
 
+    def _min_samples(self) -> int:
+        return 2 if self.fit_intercept else 1  # one sample cannot tell an intercept from slopes
+
     def _fit(self, x: F64, y: F64) -> None:
         self._inner = _core.MlrModel.fit(x, y, fit_intercept=bool(self.fit_intercept))
 

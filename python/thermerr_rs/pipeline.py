@@ -8,11 +8,11 @@ from typing import Any
 import numpy as np
 
 from ._arrays import F64, as_matrix
-from .base import _WRAPPERS, Estimator, Regressor, _from_dict
+from .base import _WRAPPERS, Estimator, Regressor, _from_dict, _Wrapper
 from .errors import DataError
 
 
-class MinMaxScaled(Regressor):
+class MinMaxScaled(_Wrapper, Regressor):
     """``estimator`` fitted on inputs min–max scaled to [0, 1] by the training ranges.
 
     MATLAB users know this as ``mapminmax`` before ``newrb``: RBF spreads are then comparable

@@ -11,10 +11,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from sklearn.base import MetaEstimatorMixin, clone
+from sklearn.base import clone
 
 from ._arrays import F64, as_matrix, as_vector
-from .base import _WRAPPERS, Estimator, SequenceModel
+from .base import _WRAPPERS, Estimator, SequenceModel, _Wrapper
 from .errors import DataError, ParameterError
 
 
@@ -51,7 +51,7 @@ class MinMaxAGO:
         return iago(x1) * (self.hi - self.lo) + self.lo
 
 
-class AGORegressor(MetaEstimatorMixin, SequenceModel):  # type: ignore[misc]
+class AGORegressor(_Wrapper, SequenceModel):
     """Wraps an estimator with seed 001's transform: a clone of ``estimator`` (the estimator
     passed is left untouched) is fitted on the normalised, accumulated inputs and target, and
     predicts by IAGO and de-normalisation.
@@ -75,6 +75,9 @@ class AGORegressor(MetaEstimatorMixin, SequenceModel):  # type: ignore[misc]
         self._check_fitted()
         inner: Estimator = self._inner
         return inner
+
+    def _min_samples(self) -> int:
+        return 2  # min-max scaling needs two different values
 
     def _fit(self, x: F64, y: F64) -> None:
         self.x_tf_ = MinMaxAGO.fit(x)
