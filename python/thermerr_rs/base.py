@@ -52,6 +52,7 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
     #: ``check_estimator(expected_failed_checks=...)`` on scikit-learn >= 1.6, and the
     #: ``_xfail_checks`` tag before
     _xfail_checks: ClassVar[dict[str, str]] = {}
+
     def __init_subclass__(cls, **kw: Any) -> None:
         super().__init_subclass__(**kw)
         if cls.kind:
@@ -146,7 +147,8 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         """The fewest samples ``fit`` can work with (checked before fitting)."""
         return 1
 
-    def _fit(self, x: F64, y: F64) -> None:
+    def _fit(self, x: F64, y: Any) -> None:
+        """Fit on the checked inputs ``x`` and target ``y`` (``None`` for a clusterer)."""
         raise NotImplementedError
 
     def _predict(self, x: F64) -> F64:
@@ -206,8 +208,8 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
 
 
 class Regressor(RegressorMixin, Estimator):  # type: ignore[misc]
-    """Base of the regressors: ``fit(X, y)``, ``predict(X)``, ``score`` (R²), and ``fit_run`` /
-    ``predict_run`` on the columns of a :class:`thermerr_rs.Run`."""
+    """Base of the regressors: scikit-learn's regressor tags and ``score`` (R²) over the
+    ``fit(X, y)``, ``predict(X)``, ``fit_run`` and ``predict_run`` of :class:`Estimator`."""
 
     #: scikit-learn's ``poor_score`` tag: not expected to score well on the random, unordered
     #: data of scikit-learn's checks
@@ -257,7 +259,7 @@ class Clusterer(ClusterMixin, Estimator):  # type: ignore[misc]
     def fit(self: E, X: Any, y: Any = None) -> E:
         """Cluster the rows of ``X``; ``y`` is ignored (scikit-learn convention)."""
         x = as_matrix(X, one_d=False)
-        self._fit(x, None)  # type: ignore[arg-type]
+        self._fit(x, None)
         return self._fitted_on(x, feature_names(X))
 
 
