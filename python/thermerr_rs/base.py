@@ -60,9 +60,9 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
 
     # -- parameters and tags --------------------------------------------------------------
     def set_params(self: E, **params: Any) -> E:
-        valid = self.get_params(deep=False)
+        valid = self.get_params(deep=True)  # nested ones too: estimator__C
         for k in params:
-            if k.split("__", 1)[0] not in valid:
+            if k not in valid:
                 raise ParameterError(f"{type(self).__name__} has no parameter {k!r} (it has {list(valid)})")
         super().set_params(**params)
         return self
