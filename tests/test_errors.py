@@ -17,10 +17,12 @@ from thermerr_rs import errors
         (errors.ParameterError, ValueError),
         (errors.ShapeError, ValueError),
         (errors.DataError, ValueError),
+        (errors.DataTypeError, TypeError),
         (errors.MissingColumnError, KeyError),
         (errors.NumericalError, ArithmeticError),
         (errors.ConvergenceError, RuntimeError),
         (errors.NotFittedError, AttributeError),
+        (errors.NotFittedError, ValueError),
         (errors.ModelFormatError, ValueError),
     ],
 )

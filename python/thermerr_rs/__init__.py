@@ -7,10 +7,11 @@ them. See the README for the command line (``thermerr``).
 from __future__ import annotations
 
 from ._core import __version__
-from .base import FORMAT_VERSION, Estimator, load_model
+from .base import FORMAT_VERSION, Clusterer, Estimator, Regressor, SequenceModel, load_model
 from .errors import (
     ConvergenceError,
     DataError,
+    DataTypeError,
     MissingColumnError,
     ModelFormatError,
     NotFittedError,
@@ -37,6 +38,9 @@ __all__ = [
     "__version__",
     "FORMAT_VERSION",
     "Estimator",
+    "Regressor",
+    "SequenceModel",
+    "Clusterer",
     "load_model",
     "Run",
     "read_run",
@@ -72,6 +76,7 @@ __all__ = [
     "ParameterError",
     "ShapeError",
     "DataError",
+    "DataTypeError",
     "MissingColumnError",
     "NumericalError",
     "ConvergenceError",

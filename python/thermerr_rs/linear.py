@@ -6,10 +6,10 @@ from typing import Any
 
 from . import _core
 from ._arrays import F64
-from .base import Estimator
+from .base import Regressor
 
 
-class MLR(Estimator):
+class MLR(Regressor):
     """Ordinary least squares ``y = intercept_ + X @ coef_`` (the seeds' "multiple linear
     regression" baseline). Equals scikit-learn's ``LinearRegression`` on the same data.
 
@@ -17,10 +17,13 @@ class MLR(Estimator):
     """
 
     kind = "mlr"
+    _inner: _core.MlrModel | None = None
 
     def __init__(self, *, fit_intercept: bool = True) -> None:
         self.fit_intercept = fit_intercept
-        self._inner: _core.MlrModel | None = None
+
+    def _min_samples(self) -> int:
+        return 2 if self.fit_intercept else 1  # one sample cannot tell an intercept from slopes
 
     def _fit(self, x: F64, y: F64) -> None:
         self._inner = _core.MlrModel.fit(x, y, fit_intercept=bool(self.fit_intercept))

@@ -12,10 +12,11 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
+from sklearn.base import clone
 
 from ._arrays import F64, as_matrix, as_vector
 from . import _core
-from .base import Estimator
+from .base import Estimator, Regressor, SequenceModel, _Wrapper
 from .errors import DataError, ParameterError
 
 
@@ -69,36 +70,49 @@ class MinMaxAGO:
                                 for j in range(a.shape[1])])
 
 
-class _Preprocessed(Estimator):
+class _Preprocessed(_Wrapper, Estimator):
     """An estimator fitted on preprocessed inputs (and target); the arithmetic is the core's
-    (``thermerr_core::artifact::Preprocessing``), the same the edge runs. The file written by
-    ``save`` is the inner estimator's with a ``"preprocessing"`` entry, so the edge reads it."""
+    (``thermerr_core::artifact::Preprocessing``), the same the edge runs. A clone of
+    ``estimator`` is fitted (the estimator passed is left untouched). The file written by
+    ``save`` is the inner estimator's with a ``"preprocessing"`` entry, so the edge reads it.
+
+    Fitted attributes: ``estimator_`` (the fitted clone), ``pre_`` (the core's preprocessing,
+    with ``transform``, ``transform_target``, ``inverse``)."""
 
     kind = ""  # not a model kind of its own: see ``preprocessing`` in the file
     preprocessing_kind: ClassVar[str] = ""
 
     def __init__(self, estimator: Estimator) -> None:
         self.estimator = estimator
-        self._inner: Any = None
 
-    def _fit(self, x: F64, y: F64) -> None:
+    @property
+    def estimator_(self) -> Estimator:
+        """The fitted clone of ``estimator``."""
+        self._check_fitted()
+        inner: Estimator = self._inner
+        return inner
+
+    def _min_samples(self) -> int:
+        return 2  # a training range needs two samples
+
+    def _fit(self, x: F64, y: Any) -> None:
         self.pre_ = _core.Preprocessing.fit(self.preprocessing_kind, x, y)
-        self.estimator.fit(self.pre_.transform(x), self.pre_.transform_target(y))
-        self._inner = self.estimator
+        inner = clone(self.estimator)
+        inner.fit(self.pre_.transform(x), self.pre_.transform_target(y))
+        self._inner = inner
 
     def _predict(self, x: F64) -> F64:
-        out: F64 = self.pre_.inverse(self.estimator.predict(self.pre_.transform(x)))
+        out: F64 = self.pre_.inverse(self._inner._predict_columns(self.pre_.transform(x)))
         return out
 
     def _file_kind(self) -> str:
-        return self.estimator._file_kind()
+        return self.estimator_._file_kind()
 
     def _fitted(self) -> Any:
-        self._check_fitted()
-        return self.estimator._fitted()
+        return self.estimator_._fitted()
 
     def _header(self) -> dict[str, Any]:
-        head = self.estimator._header()
+        head = self.estimator_._header()
         head.update(features=self.feature_names_in_, target=self.target_name_, inputs=self.inputs_,
                     preprocessing=json.loads(self.pre_.to_json()))
         return head
@@ -115,7 +129,7 @@ class _Preprocessed(Estimator):
         return out
 
 
-class MinMaxScaled(_Preprocessed):
+class MinMaxScaled(_Preprocessed, Regressor):
     """``estimator`` fitted on inputs min–max scaled to [0, 1] by the training ranges (a
     constant column maps to 0.5).
 
@@ -127,7 +141,7 @@ class MinMaxScaled(_Preprocessed):
     preprocessing_kind = "minmax"
 
 
-class AGORegressor(_Preprocessed):
+class AGORegressor(_Preprocessed, SequenceModel):
     """Wraps an estimator with seed 001's transform: it is fitted on the normalised, accumulated
     inputs and target, and predicts by IAGO and de-normalisation.
 

@@ -6,10 +6,10 @@ from typing import Any
 
 from . import _core
 from ._arrays import F64
-from .base import Estimator
+from .base import Regressor
 
 
-class RBFNetwork(Estimator):
+class RBFNetwork(Regressor):
     """Gaussian hidden layer with MATLAB's ``radbas`` convention, φ(r) = exp(−(0.8326·r/spread)²)
     (φ = 0.5 at r = spread), and a linear output with a bias.
 
@@ -37,6 +37,7 @@ class RBFNetwork(Estimator):
     """
 
     kind = "rbf"
+    _inner: _core.RbfModel | None = None
 
     def __init__(
         self,
@@ -56,7 +57,6 @@ class RBFNetwork(Estimator):
         self.n_centers = n_centers
         self.seed = seed
         self.rule = rule
-        self._inner: _core.RbfModel | None = None
 
     def _fit(self, x: F64, y: F64) -> None:
         self._inner = _core.RbfModel.fit(
