@@ -37,7 +37,7 @@ def scores(measured: _F64, predicted: _F64, zero_tol: float | None = None) -> di
 @final
 class MlrModel:
     @staticmethod
-    def fit(x: _F64, y: _F64, *, fit_intercept: bool = True) -> MlrModel: ...
+    def fit(x: _F64, y: _F64, *, fit_intercept: bool | None = None) -> MlrModel: ...
     def predict(self, x: _F64) -> _F64: ...
     @property
     def coef(self) -> _F64: ...
@@ -91,13 +91,13 @@ class RbfModel:
         x: _F64,
         y: _F64,
         *,
-        design: str = "exact",
-        spread: float = 1.0,
-        goal: float = 0.0,
+        design: str | None = None,
+        spread: float | None = None,
+        goal: float | None = None,
         max_neurons: int | None = None,
         n_centers: int | None = None,
         seed: int | None = None,
-        rule: str = "ols",
+        rule: str | None = None,
     ) -> RbfModel: ...
     def predict(self, x: _F64) -> _F64: ...
     @property
@@ -170,13 +170,13 @@ class SvrModel:
         x: _F64,
         y: _F64,
         *,
-        c: float = 1.0,
-        epsilon: float = 0.1,
-        kernel: str = "rbf",
-        gamma: str | float = ...,  # "scale"
-        tol: float = 1e-3,
-        shrinking: bool = True,
-        cache_size: float = 200.0,
+        c: float | None = None,
+        epsilon: float | None = None,
+        kernel: str | None = None,
+        gamma: str | float | None = None,
+        tol: float | None = None,
+        shrinking: bool | None = None,
+        cache_size: float | None = None,
         max_iter: int | None = None,
     ) -> SvrModel: ...
     def predict(self, x: _F64) -> _F64: ...
@@ -251,18 +251,19 @@ class GreyModel:
         x: _F64,
         y: _F64,
         *,
-        windows: list[int],
-        net: bool = True,
-        hidden: int = 7,
-        trainer: str = "seed",
-        lr: float = 0.01,
-        momentum: float = 0.9,
-        max_epochs: int = 8000,
-        goal: float = 0.01,
-        patience: int = 500,
-        init: float = 1.0,
-        seed: int = 0,
+        windows: list[int] | None = None,
+        hidden: int | None = None,
+        trainer: str | None = None,
+        lr: float | None = None,
+        momentum: float | None = None,
+        max_epochs: int | None = None,
+        goal: float | None = None,
+        patience: int | None = None,
+        init: float | None = None,
+        seed: int | None = None,
     ) -> GreyModel: ...
+    @staticmethod
+    def fit_gm1n(x: _F64, y: _F64, *, window: int | None = None) -> GreyModel: ...
     def predict(self, x: _F64, y: _F64 | None = None) -> _F64: ...
     @property
     def windows(self) -> list[int]: ...
@@ -278,15 +279,15 @@ class BpModel:
         x: _F64,
         y: _F64,
         *,
-        hidden: list[int] = ...,
-        trainer: str = "seed",
-        lr: float = 0.01,
-        momentum: float = 0.9,
-        max_epochs: int = 8000,
-        goal: float = 0.01,
-        patience: int = 500,
-        init: float = 1.0,
-        seed: int = 0,
+        hidden: list[int] | None = None,
+        trainer: str | None = None,
+        lr: float | None = None,
+        momentum: float | None = None,
+        max_epochs: int | None = None,
+        goal: float | None = None,
+        patience: int | None = None,
+        init: float | None = None,
+        seed: int | None = None,
     ) -> BpModel: ...
     def predict(self, x: _F64) -> _F64: ...
     @property
@@ -305,20 +306,20 @@ class HybridModel:
         y: _F64,
         *,
         starts: list[int] = ...,
-        variant: str = "hybrid",
-        ma_lags: int = 1,
-        ar_lags: int = 2,
-        c_y: float = 0.02,
-        limit: float = 50.0,
-        hidden: int = 30,
-        trainer: str = "adam",
-        lr: float = 0.01,
-        momentum: float = 0.9,
-        max_epochs: int = 10000,
-        goal: float = 0.0,
-        patience: int = 500,
-        init: float = 0.5,
-        seed: int = 0,
+        variant: str | None = None,
+        ma_lags: int | None = None,
+        ar_lags: int | None = None,
+        c_y: float | None = None,
+        limit: float | None = None,
+        hidden: int | None = None,
+        trainer: str | None = None,
+        lr: float | None = None,
+        momentum: float | None = None,
+        max_epochs: int | None = None,
+        goal: float | None = None,
+        patience: int | None = None,
+        init: float | None = None,
+        seed: int | None = None,
     ) -> HybridModel: ...
     def predict(self, x: _F64, y: _F64 | None = None) -> _F64: ...
     @property
@@ -327,3 +328,8 @@ class HybridModel:
     def history(self) -> _F64: ...
     @property
     def n_features(self) -> int: ...
+
+# --- defaults -----------------------------------------------------------------------------------
+def default_params(kind: str) -> dict[str, Any]:
+    """The core's default hyper-parameters of a model kind ("mlr", "rbf", "svr", "bp", "greybp",
+    "gm1n", "hybrid"); every ``fit`` keyword left as ``None`` takes these."""

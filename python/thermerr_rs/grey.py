@@ -10,19 +10,14 @@ import numpy as np
 from . import _core
 from ._arrays import F64, as_vector, feature_names
 from .base import Regressor, SequenceModel
-from .errors import ModelFormatError, ParameterError
-
-#: the MSE goal on the normalised error of each trainer when ``goal=None``
-DEFAULT_GOAL = {"seed": 0.01, "adam": 1e-5}
+from .errors import ModelFormatError
 
 
 def _net_kw(est: Any) -> dict[str, Any]:
-    if est.trainer not in DEFAULT_GOAL:
-        raise ParameterError(f'trainer must be "seed" or "adam", got {est.trainer!r}')
+    """The network keywords; ``goal=None`` is the trainer's goal (0.01 seed, 1e-5 Adam)."""
     return dict(
         trainer=str(est.trainer), lr=float(est.lr), momentum=float(est.momentum),
-        max_epochs=int(est.max_epochs),
-        goal=float(DEFAULT_GOAL[est.trainer] if est.goal is None else est.goal),
+        max_epochs=int(est.max_epochs), goal=None if est.goal is None else float(est.goal),
         patience=int(est.patience), seed=int(est.seed),
     )
 
@@ -89,7 +84,7 @@ class GreyBP(_Sequential):
         self.seed = seed
 
     def _fit(self, x: F64, y: F64) -> None:
-        self._inner = _core.GreyModel.fit(x, y, windows=[int(w) for w in self.windows], net=True,
+        self._inner = _core.GreyModel.fit(x, y, windows=[int(w) for w in self.windows],
                                           hidden=int(self.hidden), **_net_kw(self))
 
 
@@ -105,7 +100,7 @@ class GM1N(_Sequential):
         self.window = window
 
     def _fit(self, x: F64, y: F64) -> None:
-        self._inner = _core.GreyModel.fit(x, y, windows=[int(self.window)], net=False)
+        self._inner = _core.GreyModel.fit_gm1n(x, y, window=int(self.window))
 
 
     @property

@@ -9,7 +9,7 @@ import numpy as np
 
 from . import _core
 from ._arrays import F64, feature_names, series_name
-from .errors import ParameterError, ShapeError
+from .errors import ShapeError
 from .grey import _Sequential
 
 
@@ -56,13 +56,11 @@ class HybridFilterNet(_Sequential):
         return max(int(self.ma_lags), int(self.ar_lags)) + 1  # one sample past the longest lag
 
     def _fit(self, x: F64, y: F64, starts: list[int] | None = None) -> None:
-        if self.trainer not in ("seed", "adam"):
-            raise ParameterError(f'trainer must be "seed" or "adam", got {self.trainer!r}')
         self._inner = _core.HybridModel.fit(
             x, y, starts=[int(s) for s in (starts or [])], variant=str(self.variant), ma_lags=int(self.ma_lags),
             ar_lags=int(self.ar_lags), c_y=float(self.c_y), limit=float(self.limit), hidden=int(self.hidden),
             trainer=str(self.trainer), lr=float(self.lr), momentum=float(self.momentum),
-            max_epochs=int(self.max_epochs), goal=0.0, patience=int(self.patience), seed=int(self.seed),
+            max_epochs=int(self.max_epochs), patience=int(self.patience), seed=int(self.seed),
         )
 
     def fit_runs(self, runs: list[Any], target: str, features: list[str], *, inputs: str = "absolute") -> HybridFilterNet:
