@@ -44,7 +44,7 @@ impl PyFcmModel {
             .init(init)
             .check()
             .map_err(PyErrWrap)?;
-        let inner = py.detach(|| params.fit(xs)).map_err(PyErrWrap)?;
+        let inner = crate::detach(py, || params.fit(xs))?;
         Ok(PyFcmModel { inner })
     }
 
@@ -55,9 +55,7 @@ impl PyFcmModel {
         x: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let xs = samples(&x)?;
-        let u = py
-            .detach(|| self.inner.predict_membership(xs))
-            .map_err(PyErrWrap)?;
+        let u = crate::detach(py, || self.inner.predict_membership(xs))?;
         matrix_to_py(py, u)
     }
 
@@ -68,7 +66,7 @@ impl PyFcmModel {
         x: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
         let xs = samples(&x)?;
-        let l = py.detach(|| self.inner.predict(xs)).map_err(PyErrWrap)?;
+        let l = crate::detach(py, || self.inner.predict(xs))?;
         Ok(labels_to_py(py, l))
     }
 

@@ -45,9 +45,7 @@ impl PyGreyModel {
                 )
             });
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
-        let inner = py
-            .detach(|| params.check()?.fit(xs, ys))
-            .map_err(PyErrWrap)?;
+        let inner = crate::detach(py, || params.check()?.fit(xs, ys))?;
         Ok(PyGreyModel { inner })
     }
 
@@ -62,9 +60,7 @@ impl PyGreyModel {
     ) -> PyResult<Self> {
         let params = Gm1nParams::new().given(window, Gm1nParams::window);
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
-        let inner = py
-            .detach(|| params.check()?.fit(xs, ys))
-            .map_err(PyErrWrap)?;
+        let inner = crate::detach(py, || params.check()?.fit(xs, ys))?;
         Ok(PyGreyModel { inner })
     }
 
@@ -163,9 +159,7 @@ impl PyBpModel {
             seed,
         );
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
-        let inner = py
-            .detach(|| params.check()?.fit(xs, ys))
-            .map_err(PyErrWrap)?;
+        let inner = crate::detach(py, || params.check()?.fit(xs, ys))?;
         Ok(PyBpModel { inner })
     }
 
@@ -174,9 +168,7 @@ impl PyBpModel {
         py: Python<'py>,
         x: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let xs = samples(&x)?;
-        let y = py.detach(|| self.inner.predict(xs)).map_err(PyErrWrap)?;
-        Ok(vec_to_py(py, y))
+        crate::predict_rows(py, &x, |xs| self.inner.predict(xs))
     }
 
     #[getter]

@@ -5,7 +5,7 @@ use pyo3::prelude::*;
 use thermerr_core::hybrid::{HybridModel, HybridParams};
 
 use crate::params::{net, parse, Given};
-use crate::{samples, slice1, vec_to_py, PyErrWrap};
+use crate::{samples, slice1, vec_to_py};
 
 /// A fitted filter model (the Python `HybridFilterNet` holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "HybridModel")]
@@ -52,9 +52,7 @@ impl PyHybridModel {
                 )
             });
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
-        let inner = py
-            .detach(|| params.check()?.fit(xs, ys, &starts))
-            .map_err(PyErrWrap)?;
+        let inner = crate::detach(py, || params.check()?.fit(xs, ys, &starts))?;
         Ok(PyHybridModel { inner })
     }
 

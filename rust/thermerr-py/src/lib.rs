@@ -20,6 +20,25 @@ use thermerr_core::Samples;
 
 pub use error::{PyErrWrap, PyRes};
 
+/// Runs a core call with the GIL released and turns its error into the matching exception: the
+/// one way every binding calls into the core (polars' `enter_polars`).
+pub(crate) fn detach<T: Send>(
+    py: Python<'_>,
+    f: impl FnOnce() -> thermerr_core::Result<T> + Send,
+) -> PyResult<T> {
+    py.detach(f).map_err(|e| PyErrWrap(e).into())
+}
+
+/// Predicts the rows of `x` with a model's batch `predict`, the GIL released.
+pub(crate) fn predict_rows<'py>(
+    py: Python<'py>,
+    x: &PyReadonlyArray2<'py, f64>,
+    predict: impl FnOnce(Samples<'_>) -> thermerr_core::Result<Vec<f64>> + Send,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let xs = samples(x)?;
+    Ok(vec_to_py(py, detach(py, || predict(xs))?))
+}
+
 /// Borrows a C-contiguous float64 2-D array as row-major samples.
 pub(crate) fn samples<'a>(x: &'a PyReadonlyArray2<'_, f64>) -> PyResult<Samples<'a>> {
     let (n, d) = (x.shape()[0], x.shape()[1]);
@@ -61,7 +80,7 @@ pub(crate) fn predict_series<'py>(
         Some(a) => Some(slice1(a)?),
         None => None,
     };
-    let out = py.detach(|| f(xs.as_slice(), ys)).map_err(PyErrWrap)?;
+    let out = detach(py, || f(xs.as_slice(), ys))?;
     Ok(vec_to_py(py, out))
 }
 

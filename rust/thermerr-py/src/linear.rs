@@ -5,7 +5,7 @@ use pyo3::prelude::*;
 use thermerr_core::linear::{LinearRegression, MlrParams};
 
 use crate::params::Given;
-use crate::{samples, slice1, vec_to_py, PyErrWrap};
+use crate::{samples, slice1, vec_to_py};
 
 /// A fitted linear model (the Python `MLR` estimator holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "MlrModel")]
@@ -25,9 +25,7 @@ impl PyMlrModel {
     ) -> PyResult<Self> {
         let params = MlrParams::new().given(fit_intercept, MlrParams::fit_intercept);
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
-        let inner = py
-            .detach(|| params.check()?.fit(xs, ys))
-            .map_err(PyErrWrap)?;
+        let inner = crate::detach(py, || params.check()?.fit(xs, ys))?;
         Ok(PyMlrModel { inner })
     }
 
@@ -36,9 +34,7 @@ impl PyMlrModel {
         py: Python<'py>,
         x: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let xs = samples(&x)?;
-        let y = py.detach(|| self.inner.predict(xs)).map_err(PyErrWrap)?;
-        Ok(vec_to_py(py, y))
+        crate::predict_rows(py, &x, |xs| self.inner.predict(xs))
     }
 
     #[getter]

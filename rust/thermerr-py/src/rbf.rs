@@ -7,7 +7,7 @@ use thermerr_core::rbf::{RbfNetwork, RbfParams};
 use thermerr_core::Matrix;
 
 use crate::params::{parse, Given};
-use crate::{matrix_to_py, samples, slice1, vec_to_py, PyErrWrap};
+use crate::{matrix_to_py, samples, slice1, vec_to_py};
 
 /// A fitted RBF network (the Python `RBFNetwork` holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "RbfModel")]
@@ -41,9 +41,7 @@ impl PyRbfModel {
             .seed(seed)
             .given(parse(rule)?, RbfParams::rule);
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
-        let inner = py
-            .detach(|| params.check()?.fit(xs, ys))
-            .map_err(PyErrWrap)?;
+        let inner = crate::detach(py, || params.check()?.fit(xs, ys))?;
         Ok(PyRbfModel { inner })
     }
 
@@ -52,9 +50,7 @@ impl PyRbfModel {
         py: Python<'py>,
         x: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let xs = samples(&x)?;
-        let y = py.detach(|| self.inner.predict(xs)).map_err(PyErrWrap)?;
-        Ok(vec_to_py(py, y))
+        crate::predict_rows(py, &x, |xs| self.inner.predict(xs))
     }
 
     #[getter]
@@ -104,9 +100,7 @@ fn kmeans<'py>(
         shape: [is.nrows(), is.ncols()],
         data: is.as_slice().to_vec(),
     };
-    let km = py
-        .detach(|| core_kmeans(xs, &init, max_iter))
-        .map_err(PyErrWrap)?;
+    let km = crate::detach(py, || core_kmeans(xs, &init, max_iter))?;
     Ok((
         matrix_to_py(py, km.centers)?,
         km.labels,

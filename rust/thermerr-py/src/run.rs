@@ -34,9 +34,7 @@ fn run_to_dict<'py>(py: Python<'py>, run: Run) -> PyResult<Bound<'py, PyDict>> {
 #[pyo3(signature = (path, nan = "error"))]
 fn read_run<'py>(py: Python<'py>, path: PathBuf, nan: &str) -> PyResult<Bound<'py, PyDict>> {
     let policy: NanPolicy = nan.parse().map_err(PyErrWrap)?;
-    let run = py
-        .detach(|| Run::read_csv(&path, policy))
-        .map_err(PyErrWrap)?;
+    let run = crate::detach(py, || Run::read_csv(&path, policy))?;
     run_to_dict(py, run)
 }
 

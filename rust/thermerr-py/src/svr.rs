@@ -57,9 +57,7 @@ impl PySvrModel {
             .given(cache_size, SvrParams::cache_size)
             .max_iter(max_iter);
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
-        let inner = py
-            .detach(|| params.check()?.fit(xs, ys))
-            .map_err(PyErrWrap)?;
+        let inner = crate::detach(py, || params.check()?.fit(xs, ys))?;
         Ok(PySvrModel { inner })
     }
 
@@ -68,9 +66,7 @@ impl PySvrModel {
         py: Python<'py>,
         x: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-        let xs = samples(&x)?;
-        let y = py.detach(|| self.inner.predict(xs)).map_err(PyErrWrap)?;
-        Ok(vec_to_py(py, y))
+        crate::predict_rows(py, &x, |xs| self.inner.predict(xs))
     }
 
     #[getter]

@@ -216,9 +216,7 @@ fn svr_cv_mse(
         .epsilon(epsilon)
         .tol(tol)
         .gamma(thermerr_core::svr::Gamma::Value(gamma));
-    Ok(py
-        .detach(|| tune::cv_mse(xs, ys, &folds, &p))
-        .map_err(PyErrWrap)?)
+    crate::detach(py, || tune::cv_mse(xs, ys, &folds, &p))
 }
 
 /// Native CSO/PSO search of (C, gamma) by k-fold CV MSE; returns
