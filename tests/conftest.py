@@ -1,5 +1,9 @@
 from __future__ import annotations
 
+import json
+import os
+import shutil
+import subprocess
 from pathlib import Path
 
 import pytest
@@ -31,3 +35,17 @@ def write_csv(tmp_path: Path):
         return p
 
     return _write
+
+
+@pytest.fixture(scope="session")
+def edge_bin() -> Path:
+    """The release binary of thermerr-edge (built once per session if missing;
+    THERMERR_EDGE_BIN overrides)."""
+    if os.environ.get("THERMERR_EDGE_BIN"):
+        return Path(os.environ["THERMERR_EDGE_BIN"])
+    if shutil.which("cargo") is None:
+        pytest.skip("cargo is not available to build thermerr-edge")
+    subprocess.run(["cargo", "build", "--release", "-q", "-p", "thermerr-edge"], cwd=ROOT, check=True)
+    meta = json.loads(subprocess.run(["cargo", "metadata", "--format-version", "1", "--no-deps"], cwd=ROOT,
+                                     check=True, capture_output=True, text=True).stdout)
+    return Path(meta["target_directory"]) / "release" / "thermerr-edge"

@@ -5,6 +5,8 @@ several seeds. Every case is a fresh machine, duty cycle and nominal-parameter p
 from __future__ import annotations
 
 import json
+import re
+import sys
 
 import numpy as np
 import pytest
@@ -108,3 +110,50 @@ def test_deterministic():
     a, b = diagnose(*args), diagnose(*args)
     assert a.report["candidates"] == b.report["candidates"]
     assert np.array_equal(a.series["extended"], b.series["extended"])
+
+
+@pytest.fixture(scope="module")
+def small():
+    c = syn.make_case("lathe", "none", 4, hours=(8.0, 4.0))
+    return diagnose(tr.Run.from_frame(c.train), Machine.from_toml(c.nominal_toml()), tr.Run.from_frame(c.test))
+
+
+def test_a_cause_is_named_only_when_it_cuts_the_error():
+    from conftest import EXAMPLES
+
+    # a tester's machine file with capacities in kJ/K instead of J/K
+    text = (EXAMPLES / "vmc_nominal.toml").read_text()
+    kj = re.sub(r"(capacity_j_per_k = )([0-9.]+)", lambda m: f"{m[1]}{float(m[2]) / 1000}", text)
+    d = diagnose(tr.read_run(EXAMPLES / "vmc_run.csv"), Machine.from_toml(kj, "kj.toml"))
+    base, ext = d.report["baseline"]["rmse_um"], d.report["extended"]["rmse_um"]
+    if d.verdict in ("none", "unexplained"):
+        assert ext == base
+    else:
+        assert ext < base, d.evidence
+    assert ("cuts" in d.evidence) == (ext < base), d.evidence
+
+
+def test_report_leaves_the_matplotlib_backend_alone(small, tmp_path):
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    before = matplotlib.get_backend()
+    matplotlib.use("svg")
+    try:
+        small.write(tmp_path / "out")
+        assert matplotlib.get_backend() == "svg" and plt.get_fignums() == []
+    finally:
+        matplotlib.use(before)
+    assert (tmp_path / "out" / "report.html").read_text().count("data:image/png;base64") >= 3
+
+
+def test_report_without_matplotlib(small, tmp_path, monkeypatch):
+    for name in ("matplotlib", "matplotlib.figure"):
+        monkeypatch.setitem(sys.modules, name, None)
+    out = tmp_path / "out"
+    small.write(out)
+    assert json.loads((out / "report.json").read_text()) == small.report
+    assert (out / "calibrated.toml").read_text() == small.calibrated.to_toml()
+    assert (out / "extended.toml").read_text() == small.extended.to_toml()
+    html = (out / "report.html").read_text()
+    assert "pip install thermerr_rs[report]" in html and "<img" not in html

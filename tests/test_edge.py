@@ -5,8 +5,6 @@ run."""
 from __future__ import annotations
 
 import json
-import os
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -14,23 +12,10 @@ import numpy as np
 import pytest
 
 import thermerr_rs as tr
-from thermerr_rs.pipeline import MinMaxScaled
+from thermerr_rs import MinMaxScaled
 
 ROOT = Path(__file__).resolve().parents[1]
 SENSORS = ["T_s01", "T_s07", "T_s10", "T_s13"]
-
-
-@pytest.fixture(scope="module")
-def edge_bin() -> Path:
-    """The release binary (built once per session if missing; THERMERR_EDGE_BIN overrides)."""
-    if os.environ.get("THERMERR_EDGE_BIN"):
-        return Path(os.environ["THERMERR_EDGE_BIN"])
-    if shutil.which("cargo") is None:
-        pytest.skip("cargo is not available to build thermerr-edge")
-    subprocess.run(["cargo", "build", "--release", "-q", "-p", "thermerr-edge"], cwd=ROOT, check=True)
-    meta = json.loads(subprocess.run(["cargo", "metadata", "--format-version", "1", "--no-deps"], cwd=ROOT,
-                                     check=True, capture_output=True, text=True).stdout)
-    return Path(meta["target_directory"]) / "release" / "thermerr-edge"
 
 
 def models() -> dict[str, tuple[tr.Estimator, str]]:

@@ -17,10 +17,12 @@ from thermerr_rs import errors
         (errors.ParameterError, ValueError),
         (errors.ShapeError, ValueError),
         (errors.DataError, ValueError),
+        (errors.DataTypeError, TypeError),
         (errors.MissingColumnError, KeyError),
         (errors.NumericalError, ArithmeticError),
         (errors.ConvergenceError, RuntimeError),
         (errors.NotFittedError, AttributeError),
+        (errors.NotFittedError, ValueError),
         (errors.ModelFormatError, ValueError),
     ],
 )
@@ -42,7 +44,7 @@ def saved(tmp_path):
     [
         (lambda d: d.update(format_version=99), "format_version 99"),
         (lambda d: d.update(kind="quantum"), "unknown model kind 'quantum'"),
-        (lambda d: d.pop("model"), "missing field 'model'"),
+        (lambda d: d.pop("model"), "missing field .model."),
         (lambda d: d["model"].pop("coef"), "coef"),
         (lambda d: d.update(preprocessing={"kind": "fft"}), "unknown preprocessing"),
     ],

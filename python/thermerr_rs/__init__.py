@@ -7,10 +7,11 @@ them. See the README for the command line (``thermerr``).
 from __future__ import annotations
 
 from ._core import __version__
-from .base import FORMAT_VERSION, Estimator, load_model
+from .base import FORMAT_VERSION, Clusterer, Estimator, Regressor, SequenceModel, load_model
 from .errors import (
     ConvergenceError,
     DataError,
+    DataTypeError,
     MissingColumnError,
     ModelFormatError,
     NotFittedError,
@@ -24,7 +25,7 @@ from .grey import GM1N, BPNetwork, GreyBP
 from .hybrid import HybridFilterNet
 from .linear import MLR
 from .metrics import Scores, scores
-from .preprocessing import AGORegressor, MinMaxAGO, spread_search
+from .preprocessing import AGORegressor, MinMaxAGO, MinMaxScaled, spread_search
 from .rbf import RBFNetwork
 from .run import Run, read_run
 from .selection import SensorSelection, select_sensors
@@ -37,6 +38,9 @@ __all__ = [
     "__version__",
     "FORMAT_VERSION",
     "Estimator",
+    "Regressor",
+    "SequenceModel",
+    "Clusterer",
     "load_model",
     "Run",
     "read_run",
@@ -48,6 +52,7 @@ __all__ = [
     "select_sensors",
     "RBFNetwork",
     "MinMaxAGO",
+    "MinMaxScaled",
     "AGORegressor",
     "spread_search",
     "SVR",
@@ -71,6 +76,7 @@ __all__ = [
     "ParameterError",
     "ShapeError",
     "DataError",
+    "DataTypeError",
     "MissingColumnError",
     "NumericalError",
     "ConvergenceError",

@@ -1,22 +1,28 @@
-"""What every estimator shares: scikit-learn-style parameters, fitted attributes ending in
-``_``, and versioned JSON model files (never pickle)."""
+"""What every estimator shares: it is a scikit-learn estimator (parameters from ``__init__``,
+``get_params``/``set_params``, ``clone``, tags), fitted attributes end in ``_``, the input it was
+fitted on is checked at ``predict``, and models are saved as versioned JSON files (never pickle).
+
+The bases to derive from: :class:`Regressor`, :class:`SequenceModel` (a regressor whose
+prediction depends on the order of samples) and :class:`Clusterer`; :class:`Estimator` is their
+common root."""
 
 from __future__ import annotations
 
-import inspect
 import json
 import os
 from pathlib import Path
 from typing import Any, ClassVar, TypeVar
 
 import numpy as np
+from sklearn.base import BaseEstimator, ClusterMixin, MetaEstimatorMixin, RegressorMixin
 
-from ._arrays import F64, as_matrix, as_vector
+from . import _core
+from ._arrays import F64, as_matrix, as_target, check_features, feature_names, series_name
 from ._io import write_atomic
-from .errors import ModelFormatError, NotFittedError, ParameterError
+from .errors import ModelFormatError, NotFittedError, ParameterError, ShapeError
 
-#: Schema version of the model files this library writes and reads.
-FORMAT_VERSION = 1
+#: Schema version of the model files this library writes and reads (the core's).
+FORMAT_VERSION: int = _core.FORMAT_VERSION
 
 _REGISTRY: dict[str, type[Estimator]] = {}
 #: meta-estimators that wrap a model with input preprocessing, by the ``preprocessing.kind``
@@ -26,9 +32,12 @@ _WRAPPERS: dict[str, Any] = {}
 E = TypeVar("E", bound="Estimator")
 
 
-class Estimator:
-    """Base class: subclasses declare ``kind`` and implement ``_fit``, ``_predict``,
-    ``_state`` and ``_restore``."""
+class Estimator(BaseEstimator):  # type: ignore[misc]
+    """Common root of every thermerr_rs estimator, a scikit-learn ``BaseEstimator``.
+
+    Subclasses declare ``kind`` and implement ``_fit`` and ``_predict`` (``_fitted`` and
+    ``_restore`` when the fitted binding object is not ``_inner``); ``__init__`` only stores its
+    keyword parameters (scikit-learn's rule)."""
 
     kind: ClassVar[str] = ""
     #: names of the columns the model was fitted on, when known (a run or a DataFrame)
@@ -38,47 +47,80 @@ class Estimator:
     #: how ``fit_run``/``predict_run`` build inputs from a run's columns: ``"absolute"`` readings,
     #: or ``"rise"`` (each reading minus the run's first sample, like the error itself)
     inputs_: str = "absolute"
+    n_features_in_: int
+    #: the fitted model (Rust, or the fitted inner estimator of a wrapper); None until ``fit``
+    _inner: Any = None
+    #: scikit-learn estimator checks this class fails on purpose, with the reason: given to
+    #: ``check_estimator(expected_failed_checks=...)`` on scikit-learn >= 1.6, and the
+    #: ``_xfail_checks`` tag before
+    _xfail_checks: ClassVar[dict[str, str]] = {}
 
     def __init_subclass__(cls, **kw: Any) -> None:
         super().__init_subclass__(**kw)
         if cls.kind:
             _REGISTRY[cls.kind] = cls
+        pre = cls.__dict__.get("preprocessing_kind")
+        if pre:
+            _WRAPPERS[pre] = cls
 
-    # -- parameters ---------------------------------------------------------------------
-    @classmethod
-    def _param_names(cls) -> list[str]:
-        sig = inspect.signature(cls.__init__)
-        return [p for p in sig.parameters if p != "self"]
-
-    def get_params(self, deep: bool = True) -> dict[str, Any]:
-        return {p: getattr(self, p) for p in self._param_names()}
-
+    # -- parameters and tags --------------------------------------------------------------
     def set_params(self: E, **params: Any) -> E:
-        valid = self._param_names()
-        for k, v in params.items():
+        valid = self.get_params(deep=True)  # nested ones too: estimator__C
+        for k in params:
             if k not in valid:
-                raise ParameterError(f"{type(self).__name__} has no parameter {k!r} (it has {valid})")
-            setattr(self, k, v)
+                raise ParameterError(f"{type(self).__name__} has no parameter {k!r} (it has {list(valid)})")
+        super().set_params(**params)
         return self
 
-    def __repr__(self) -> str:
-        args = ", ".join(f"{k}={v!r}" for k, v in self.get_params().items())
-        return f"{type(self).__name__}({args})"
+    # tags: scikit-learn >= 1.6 reads __sklearn_tags__ (and takes the expected failures as
+    # check_estimator's expected_failed_checks), older releases merge the _more_tags of each class
+    def __sklearn_tags__(self) -> Any:
+        return super().__sklearn_tags__()
+
+    def _more_tags(self) -> dict[str, Any]:
+        return {"_xfail_checks": dict(self._xfail_checks)}
+
+    def __sklearn_is_fitted__(self) -> bool:
+        return self._inner is not None
 
     # -- fit / predict --------------------------------------------------------------------
     def fit(self: E, X: Any, y: Any) -> E:
-        names = _column_names(X)
-        x = as_matrix(X)
-        yv = as_vector(y, n=x.shape[0])
-        self._fit(x, yv)
+        return self._fit_checked(X, y, names=feature_names(X), target=series_name(y))
+
+    def _fit_checked(self: E, X: Any, y: Any, *, names: list[str] | None, target: str | None,
+                     inputs: str = "absolute", **fit_kw: Any) -> E:
+        """Check ``X`` and ``y``, fit, and record what the model was fitted on."""
+        x = as_matrix(X, one_d=False)
+        yv = as_target(y, x.shape[0], type(self).__name__)
+        n_min = self._min_samples()
+        if x.shape[0] < n_min:
+            raise ShapeError(f"{type(self).__name__} needs at least {n_min} samples to fit, "
+                             f"got n_samples = {x.shape[0]}")
+        self._fit(x, yv, **fit_kw)
+        return self._fitted_on(x, names, target, inputs)
+
+    def _fitted_on(self: E, x: F64, names: list[str] | None, target: str | None = None,
+                   inputs: str = "absolute") -> E:
         self.n_features_in_ = x.shape[1]
         self.feature_names_in_ = names
-        self.target_name_ = getattr(y, "name", None) if isinstance(getattr(y, "name", None), str) else None
+        self.target_name_ = target
+        self.inputs_ = inputs
         return self
 
     def predict(self, X: Any) -> F64:
+        return self._predict(self._check_X(X, feature_names(X)))
+
+    def _check_X(self, X: Any, names: list[str] | None) -> F64:
+        """``X`` (whose columns are ``names``) checked against what the model was fitted on."""
         self._check_fitted()
-        return self._predict(as_matrix(X))
+        x = as_matrix(X, one_d=False)
+        check_features(type(self).__name__, self.n_features_in_, self.feature_names_in_, x.shape[1], names)
+        return x
+
+    def _predict_columns(self, x: F64) -> F64:
+        """Predict from a matrix whose columns are ``feature_names_in_``, in order (built from a
+        run by the library itself, so no feature-name warning)."""
+        return self._predict(self._check_X(x, self.feature_names_in_))
 
     def fit_run(self: E, run: Any, target: str, features: list[str], *, inputs: str = "absolute") -> E:
         """Fit on the named columns of a :class:`thermerr_rs.Run`.
@@ -87,75 +129,79 @@ class Estimator:
         (the error is itself relative to the run's start), which carries over between runs that
         start at different shop temperatures; ``"absolute"`` uses the readings as they are.
         """
-        if inputs not in ("absolute", "rise"):
-            raise ParameterError(f'inputs must be "absolute" or "rise", got {inputs!r}')
-        self.fit(_run_inputs(run, features, inputs), run[target])
-        self.feature_names_in_ = list(features)
-        self.target_name_ = target
-        self.inputs_ = inputs
-        return self
+        return self._fit_checked(run.input_matrix(features, inputs), run[target], names=list(features),
+                                 target=target, inputs=inputs)
 
     def predict_run(self, run: Any) -> F64:
         """Predict a run from the columns (and input form) the model was fitted on."""
+        return self._predict_columns(self._run_matrix(run))
+
+    def _run_matrix(self, run: Any) -> F64:
         self._check_fitted()
         if not self.feature_names_in_:
             raise ModelFormatError("this model does not record its feature columns; use predict(X)")
-        return self.predict(_run_inputs(run, self.feature_names_in_, self.inputs_))
-
-    def score(self, X: Any, y: Any) -> float:
-        """Coefficient of determination R², as scikit-learn's regressors define it."""
-        yv = as_vector(y)
-        p = self.predict(X)
-        ss_res = float(np.sum((yv - p) ** 2))
-        ss_tot = float(np.sum((yv - yv.mean()) ** 2))
-        return 1.0 - ss_res / ss_tot if ss_tot > 0 else 0.0
+        x: F64 = run.input_matrix(self.feature_names_in_, self.inputs_)
+        return x
 
     def _check_fitted(self) -> None:
-        if getattr(self, "_inner", None) is None:
+        if self._inner is None:
             raise NotFittedError(f"this {type(self).__name__} is not fitted yet: call fit first")
 
     # subclass hooks
-    def _fit(self, x: F64, y: F64) -> None:
+    def _min_samples(self) -> int:
+        """The fewest samples ``fit`` can work with (checked before fitting)."""
+        return 1
+
+    def _fit(self, x: F64, y: Any) -> None:
+        """Fit on the checked inputs ``x`` and target ``y`` (``None`` for a clusterer)."""
         raise NotImplementedError
 
     def _predict(self, x: F64) -> F64:
         raise NotImplementedError
 
-    def _state(self) -> dict[str, Any]:
-        """JSON-able fitted state (the ``model`` field of the file)."""
-        raise NotImplementedError
-
-    def _restore(self, state: dict[str, Any]) -> None:
-        raise NotImplementedError
-
-    # -- model files ----------------------------------------------------------------------
-    def to_dict(self) -> dict[str, Any]:
+    def _fitted(self) -> Any:
+        """The binding object holding the fitted core model (what the file's ``model`` is)."""
         self._check_fitted()
+        return self._inner
+
+    def _restore(self, fitted: Any) -> None:
+        """Takes the fitted binding object read from a model file."""
+        self._inner = fitted
+
+    # -- model files: written and read by the core (thermerr_core::artifact) ---------------
+    def _file_kind(self) -> str:
+        return self.kind
+
+    def _header(self) -> dict[str, Any]:
+        """Everything in the file around the fitted model, its kind and feature count."""
         from . import __version__
 
         return {
-            "format_version": FORMAT_VERSION,
-            "kind": self.kind,
             "library": f"thermerr_rs {__version__}",
             "params": _jsonable(self.get_params()),
-            "n_features": int(self.n_features_in_),
             "features": self.feature_names_in_,
             "target": self.target_name_,
             "inputs": self.inputs_,
             "preprocessing": None,
-            "model": self._state(),
         }
 
     def to_json(self) -> str:
-        return json.dumps(self.to_dict(), indent=1, allow_nan=False)
+        """The model file's text; the core validates the model before it writes it."""
+        self._check_fitted()
+        try:
+            header = json.dumps(self._header(), allow_nan=False)
+        except (TypeError, ValueError) as e:
+            raise ModelFormatError(f"cannot save the parameters of this model: {e}") from None
+        text: str = _core.write_model(self._file_kind(), header, self._fitted())
+        return text
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = json.loads(self.to_json())
+        return out
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the model as versioned JSON, atomically."""
-        try:
-            text = self.to_json()
-        except ValueError as e:  # allow_nan=False
-            raise ModelFormatError(f"cannot save a model holding non-finite numbers: {e}") from None
-        return write_atomic(path, text)
+        return write_atomic(path, self.to_json())
 
     @classmethod
     def from_dict(cls, doc: dict[str, Any]) -> Estimator:
@@ -168,25 +214,66 @@ class Estimator:
 
     def __setstate__(self, st: dict[str, Any]) -> None:
         if "json" in st:
-            other = _from_dict(json.loads(st["json"]), expect=type(self))
+            other = _from_text(st["json"], expect=type(self))
             self.__dict__.update(other.__dict__)
         else:
             type(self).__init__(self, **st["params"])
 
 
-def _run_inputs(run: Any, features: list[str], inputs: str) -> F64:
-    x = run.matrix(features)
-    if inputs == "rise":
-        x = np.ascontiguousarray(x - x[0])
-    return x
+class Regressor(RegressorMixin, Estimator):  # type: ignore[misc]
+    """Base of the regressors: scikit-learn's regressor tags and ``score`` (R²) over the
+    ``fit(X, y)``, ``predict(X)``, ``fit_run`` and ``predict_run`` of :class:`Estimator`."""
+
+    #: scikit-learn's ``poor_score`` tag: not expected to score well on the random, unordered
+    #: data of scikit-learn's checks
+    _poor_score: ClassVar[bool] = False
+
+    def __sklearn_tags__(self) -> Any:
+        tags = super().__sklearn_tags__()
+        tags.regressor_tags.poor_score = self._poor_score
+        return tags
+
+    def _more_tags(self) -> dict[str, Any]:
+        return {"poor_score": self._poor_score}
 
 
-def _column_names(X: Any) -> list[str] | None:
-    cols = getattr(X, "columns", None)
-    if cols is None:
-        return None
-    names = [str(c) for c in cols]
-    return names or None
+class SequenceModel(Regressor):
+    """Base of the regressors of a time-ordered series: the prediction of a sample depends on
+    the samples before it, so the order of samples matters at ``fit`` and ``predict`` (rows are
+    time steps; never shuffle them: cross-validate with ``TimeSeriesSplit``).
+
+    scikit-learn has no tag for this; it is declared through the checks that assume order does
+    not matter (``_xfail_checks``) and the ``poor_score`` tag (its checks fit unordered random
+    data)."""
+
+    _xfail_checks: ClassVar[dict[str, str]] = {
+        "check_methods_sample_order_invariance": "a sequence model: the prediction of a sample "
+        "depends on the samples before it, so reordering the samples changes it",
+        "check_methods_subset_invariance": "a sequence model: the prediction of a sample depends "
+        "on the samples before it, so predicting one sample at a time changes it",
+    }
+    _poor_score: ClassVar[bool] = True
+
+
+class _Wrapper(MetaEstimatorMixin):  # type: ignore[misc]
+    """Mixin of the estimators that wrap another (its parameters show as ``estimator__...``)."""
+
+    def __getstate__(self) -> dict[str, Any]:
+        # unfitted, the state is the parameters given to __init__ (the nested ones are not)
+        if getattr(self, "_inner", None) is None:
+            return {"params": self.get_params(deep=False)}
+        state: dict[str, Any] = super().__getstate__()
+        return state
+
+
+class Clusterer(ClusterMixin, Estimator):  # type: ignore[misc]
+    """Base of the clusterers: ``fit(X)``, ``labels_``, ``predict(X)``."""
+
+    def fit(self: E, X: Any, y: Any = None) -> E:
+        """Cluster the rows of ``X``; ``y`` is ignored (scikit-learn convention)."""
+        x = as_matrix(X, one_d=False)
+        self._fit(x, None)
+        return self._fitted_on(x, feature_names(X))
 
 
 def _jsonable(v: Any) -> Any:
@@ -204,41 +291,40 @@ def _jsonable(v: Any) -> Any:
 def _from_dict(doc: Any, expect: type[Estimator] | None = None) -> Estimator:
     if not isinstance(doc, dict):
         raise ModelFormatError("a model file holds a JSON object")
-    for field in ("format_version", "kind", "params", "n_features", "model"):
-        if field not in doc:
-            raise ModelFormatError(f"missing field {field!r}")
-    if doc["format_version"] != FORMAT_VERSION:
-        raise ModelFormatError(
-            f"format_version {doc['format_version']!r} is not supported (this library reads {FORMAT_VERSION})"
-        )
-    kind = doc["kind"]
+    try:
+        text = json.dumps(doc, allow_nan=False)
+    except (TypeError, ValueError) as e:
+        raise ModelFormatError(f"not a model file: {e}") from None
+    return _from_text(text, expect)
+
+
+def _from_text(text: str, expect: type[Estimator] | None = None) -> Estimator:
+    """The estimator of a model file's text: the core reads and validates the whole file and
+    hands back the fitted model; this picks the estimator class of its ``kind``."""
+    kind, n_features, header_json, fitted = _core.read_model(text)
+    header = json.loads(header_json)
     cls = _REGISTRY.get(kind)
     if cls is None:
         raise ModelFormatError(f"unknown model kind {kind!r} (known: {sorted(_REGISTRY)})")
-    if (
-        expect is not None
-        and expect is not Estimator
-        and not issubclass(cls, expect)
-        and doc.get("preprocessing") is None
-    ):
-        raise ModelFormatError(f"the file holds a {kind!r} model, not a {expect.kind!r}")
+    pre = header.get("preprocessing")
+    if expect is not None and expect is not Estimator and not issubclass(cls, expect):
+        wrapper = _WRAPPERS.get(pre["kind"]) if pre else None
+        if wrapper is None or not issubclass(wrapper, expect):
+            raise ModelFormatError(f"the file holds a {kind!r} model, not a {expect.kind or expect.__name__!r}")
     try:
-        est = cls(**doc["params"])
-        est._restore(doc["model"])
-    except (TypeError, KeyError) as e:
-        raise ModelFormatError(f"{kind} model: bad or missing field: {e}") from None
-    est.n_features_in_ = int(doc["n_features"])
-    est.feature_names_in_ = doc.get("features")
-    est.target_name_ = doc.get("target")
-    est.inputs_ = doc.get("inputs", "absolute")
-    if est.inputs_ not in ("absolute", "rise"):
-        raise ModelFormatError(f"unknown inputs {est.inputs_!r}")
-    pre = doc.get("preprocessing")
-    if pre is None:
+        est = cls(**header["params"])
+    except TypeError as e:
+        raise ModelFormatError(f"{kind} model: bad parameters: {e}") from None
+    est._restore(fitted)
+    est.n_features_in_ = n_features
+    est.feature_names_in_ = header.get("features")
+    est.target_name_ = header.get("target")
+    est.inputs_ = header.get("inputs", "absolute")
+    if not pre:
         return est
-    if not isinstance(pre, dict) or pre.get("kind") not in _WRAPPERS:
-        raise ModelFormatError(f"unknown preprocessing {pre!r} (known: {sorted(_WRAPPERS)})")
-    wrapped: Estimator = _WRAPPERS[pre["kind"]]._wrap_restored(est, pre)
+    wrapped: Estimator = _WRAPPERS[pre["kind"]]._wrap_restored(
+        est, _core.Preprocessing.from_json(json.dumps(pre), n_features)
+    )
     return wrapped
 
 
@@ -252,10 +338,6 @@ def load_model(path: str | os.PathLike[str]) -> Estimator:
     except UnicodeDecodeError:
         raise ModelFormatError(f"{p}: not UTF-8 text") from None
     try:
-        doc = json.loads(text)
-    except json.JSONDecodeError as e:
-        raise ModelFormatError(f"{p}: not JSON ({e})") from None
-    try:
-        return _from_dict(doc)
+        return _from_text(text)
     except ModelFormatError as e:
         raise ModelFormatError(f"{p}: {e}") from None

@@ -58,14 +58,13 @@ def _sensors(args: argparse.Namespace, run: Run) -> list[str]:
 
 
 def _make_svr(args: argparse.Namespace, run: Run, sensors: list[str]) -> Estimator:
-    from .base import _run_inputs
     from .svr import SVR
 
     if not args.tune:
         return SVR(C=args.C, epsilon=args.epsilon, gamma=args.gamma if args.gamma is not None else "scale")
     from .swarm import tune_svr
 
-    res = tune_svr(_run_inputs(run, sensors, args.inputs), run[args.axis], method=args.tune, cv=args.cv,
+    res = tune_svr(run.input_matrix(sensors, args.inputs), run[args.axis], method=args.tune, cv=args.cv,
                    epsilon=args.epsilon, pop=args.pop, iters=args.iters, seed=args.seed,
                    progress=_progress_enabled(args))
     _say(args, f"{args.tune.upper()} search: C = {res.C:.5g}, gamma = {res.gamma:.5g}, "
@@ -149,7 +148,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps({"axis": target, **s.as_dict()}, indent=1))
     else:
-        inner = getattr(model, "estimator", model)
+        wrapped = getattr(model, "estimator", None)  # the model inside a preprocessing wrapper
+        inner = wrapped if isinstance(wrapped, Estimator) else model
         pre = f" ({type(model).__name__})" if inner is not model else ""
         print(f"{inner.kind} model{pre} {args.model} on {run.source}, axis {target}:")
         print("  " + str(s).replace("\n", "\n  "))

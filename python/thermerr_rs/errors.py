@@ -6,6 +6,8 @@ Every class derives from :class:`ThermerrError` *and* from the builtin a caller 
 
 from __future__ import annotations
 
+from sklearn.exceptions import NotFittedError as _SklearnNotFittedError
+
 
 class ThermerrError(Exception):
     """Base class of every error thermerr_rs raises on purpose."""
@@ -23,6 +25,11 @@ class DataError(ThermerrError, ValueError):
     """Data that cannot be used: a non-numeric cell, NaN, time not increasing, no rows, ..."""
 
 
+class DataTypeError(DataError, TypeError):
+    """Input of a type that cannot be read as numbers: a sparse matrix, a dict in an object
+    array, ... (a :class:`TypeError` too, as numpy and scikit-learn raise it)."""
+
+
 class MissingColumnError(ThermerrError, KeyError):
     """A column asked for by name is not in the run."""
 
@@ -38,8 +45,9 @@ class ConvergenceError(ThermerrError, RuntimeError):
     """An iterative method did not meet its tolerance."""
 
 
-class NotFittedError(ThermerrError, AttributeError):
-    """A model was used before ``fit``."""
+class NotFittedError(ThermerrError, _SklearnNotFittedError):
+    """A model was used before ``fit``. Also scikit-learn's ``NotFittedError`` (itself a
+    ``ValueError`` and an ``AttributeError``), so scikit-learn's tools recognise it."""
 
 
 class ModelFormatError(ThermerrError, ValueError):
@@ -51,6 +59,7 @@ __all__ = [
     "ParameterError",
     "ShapeError",
     "DataError",
+    "DataTypeError",
     "MissingColumnError",
     "NumericalError",
     "ConvergenceError",

@@ -3,15 +3,15 @@ alone and BP alone for comparison. Trained and evaluated in Rust."""
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import numpy as np
 
 from . import _core
-from ._arrays import F64, as_matrix, as_vector
-from .base import Estimator, _run_inputs
+from ._arrays import F64, as_vector, feature_names
+from .base import Regressor, SequenceModel
 from .errors import ModelFormatError
+
 
 def _net_kw(est: Any) -> dict[str, Any]:
     """The network keywords; ``goal=None`` is the trainer's goal (0.01 seed, 1e-5 Adam)."""
@@ -22,35 +22,31 @@ def _net_kw(est: Any) -> dict[str, Any]:
     )
 
 
-class _Sequential(Estimator):
+class _Sequential(SequenceModel):
     """A model of a time-ordered series whose prediction at step k uses the errors before k."""
-
-    _inner: Any
 
     def predict(self, X: Any, y_measured: Any = None) -> F64:  # type: ignore[override]
         """Closed loop (the model's own previous outputs fill the windows), or one step ahead
         from the measured errors ``y_measured`` (the error of step k−1 enters at step k)."""
-        self._check_fitted()
-        x = as_matrix(X)
+        return self._predict(self._check_X(X, feature_names(X)), y_measured)
+
+    def _predict_columns(self, x: F64, y_measured: Any = None) -> F64:
+        return self._predict(self._check_X(x, self.feature_names_in_), y_measured)
+
+    def _predict(self, x: F64, y_measured: Any = None) -> F64:
         y = None if y_measured is None else as_vector(y_measured, n=x.shape[0])
         out: F64 = self._inner.predict(x, y)
         return out
 
     def predict_run(self, run: Any, *, one_step: bool = False) -> F64:  # type: ignore[override]
         """Predict a run closed loop, or one step ahead from its measured target column."""
-        self._check_fitted()
-        if not self.feature_names_in_:
-            raise ModelFormatError("this model does not record its feature columns; use predict(X)")
-        x = _run_inputs(run, self.feature_names_in_, self.inputs_)
+        x = self._run_matrix(run)
         if one_step:
             if not self.target_name_:
                 raise ModelFormatError("this model does not record its target column")
-            return self.predict(x, run[self.target_name_])
-        return self.predict(x)
+            return self._predict_columns(x, run[self.target_name_])
+        return self._predict_columns(x)
 
-    def _state(self) -> dict[str, Any]:
-        state: dict[str, Any] = json.loads(self._inner.to_json())
-        return state
 
     @property
     def history_(self) -> F64:
@@ -72,6 +68,7 @@ class GreyBP(_Sequential):
     """
 
     kind = "greybp"
+    _inner: _core.GreyModel | None = None
 
     def __init__(self, *, windows: tuple[int, ...] | list[int] = (6, 8, 10), hidden: int = 7,
                  trainer: str = "adam", lr: float = 0.01, momentum: float = 0.9, max_epochs: int = 8000,
@@ -85,14 +82,11 @@ class GreyBP(_Sequential):
         self.goal = goal
         self.patience = patience
         self.seed = seed
-        self._inner: _core.GreyModel | None = None
 
     def _fit(self, x: F64, y: F64) -> None:
         self._inner = _core.GreyModel.fit(x, y, windows=[int(w) for w in self.windows],
                                           hidden=int(self.hidden), **_net_kw(self))
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.GreyModel.from_json(json.dumps(state))
 
 
 class GM1N(_Sequential):
@@ -100,28 +94,27 @@ class GM1N(_Sequential):
     restored time response is the prediction (seed 002's "GM" baseline)."""
 
     kind = "gm1n"
+    _inner: _core.GreyModel | None = None
 
     def __init__(self, *, window: int = 8) -> None:
         self.window = window
-        self._inner: _core.GreyModel | None = None
 
     def _fit(self, x: F64, y: F64) -> None:
         self._inner = _core.GreyModel.fit_gm1n(x, y, window=int(self.window))
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.GreyModel.from_json(json.dumps(state))
 
     @property
     def history_(self) -> F64:
         return np.empty(0)
 
 
-class BPNetwork(Estimator):
+class BPNetwork(Regressor):
     """A BP network regressor on the temperatures (seed 002's "BP" baseline): inputs and error
     min–max scaled by the training ranges, ``hidden`` sigmoid units (a list for several layers),
     linear output; trainers as in :class:`GreyBP`."""
 
     kind = "bp"
+    _inner: _core.BpModel | None = None
 
     def __init__(self, *, hidden: int | list[int] = 7, trainer: str = "adam", lr: float = 0.01,
                  momentum: float = 0.9, max_epochs: int = 8000, goal: float | None = None,
@@ -134,7 +127,6 @@ class BPNetwork(Estimator):
         self.goal = goal
         self.patience = patience
         self.seed = seed
-        self._inner: _core.BpModel | None = None
 
     def _fit(self, x: F64, y: F64) -> None:
         hidden = [int(self.hidden)] if isinstance(self.hidden, (int, np.integer)) else [int(h) for h in self.hidden]
@@ -144,13 +136,7 @@ class BPNetwork(Estimator):
         assert self._inner is not None
         return self._inner.predict(x)
 
-    def _state(self) -> dict[str, Any]:
-        assert self._inner is not None
-        state: dict[str, Any] = json.loads(self._inner.to_json())
-        return state
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.BpModel.from_json(json.dumps(state))
 
     @property
     def history_(self) -> F64:

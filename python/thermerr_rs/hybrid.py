@@ -3,16 +3,14 @@ scaled by C_Y into a tanh network; with the ARMA, FNN and LR/NN variants for com
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import numpy as np
 
 from . import _core
-from ._arrays import F64
+from ._arrays import F64, feature_names, series_name
 from .errors import ShapeError
 from .grey import _Sequential
-
 
 
 class HybridFilterNet(_Sequential):
@@ -30,6 +28,7 @@ class HybridFilterNet(_Sequential):
     """
 
     kind = "hybrid"
+    _inner: _core.HybridModel | None = None
 
     def __init__(self, *, variant: str = "hybrid", ma_lags: int = 1, ar_lags: int = 2, c_y: float = 0.02,
                  limit: float = 50.0, hidden: int = 30, trainer: str = "adam", lr: float = 0.01,
@@ -46,17 +45,19 @@ class HybridFilterNet(_Sequential):
         self.max_epochs = max_epochs
         self.patience = patience
         self.seed = seed
-        self._inner: _core.HybridModel | None = None
-        self._starts: list[int] = []
 
     def fit(self, X: Any, y: Any, starts: list[int] | None = None) -> HybridFilterNet:  # type: ignore[override]
-        self._starts = [int(s) for s in (starts or [])]
-        super().fit(X, y)
-        return self
+        """Fit on one time-ordered run, or on several stacked: ``starts`` are the first rows of
+        the runs after the first (no lag crosses from one run into the next)."""
+        return self._fit_checked(X, y, names=feature_names(X), target=series_name(y),
+                                 starts=starts)
 
-    def _fit(self, x: F64, y: F64) -> None:
+    def _min_samples(self) -> int:
+        return max(int(self.ma_lags), int(self.ar_lags)) + 1  # one sample past the longest lag
+
+    def _fit(self, x: F64, y: F64, starts: list[int] | None = None) -> None:
         self._inner = _core.HybridModel.fit(
-            x, y, starts=self._starts, variant=str(self.variant), ma_lags=int(self.ma_lags),
+            x, y, starts=[int(s) for s in (starts or [])], variant=str(self.variant), ma_lags=int(self.ma_lags),
             ar_lags=int(self.ar_lags), c_y=float(self.c_y), limit=float(self.limit), hidden=int(self.hidden),
             trainer=str(self.trainer), lr=float(self.lr), momentum=float(self.momentum),
             max_epochs=int(self.max_epochs), patience=int(self.patience), seed=int(self.seed),
@@ -64,18 +65,13 @@ class HybridFilterNet(_Sequential):
 
     def fit_runs(self, runs: list[Any], target: str, features: list[str], *, inputs: str = "absolute") -> HybridFilterNet:
         """Fit on several runs (their lags never cross from one run into the next)."""
-        from .base import _run_inputs
-
         if not runs:
             raise ShapeError("no runs to fit on")
-        xs = [_run_inputs(r, features, inputs) for r in runs]
+        xs = [r.input_matrix(features, inputs) for r in runs]
         ys = [r[target] for r in runs]
-        starts = list(np.cumsum([len(v) for v in ys])[:-1])
-        self.fit(np.vstack(xs), np.concatenate(ys), starts=[int(s) for s in starts])
-        self.feature_names_in_ = list(features)
-        self.target_name_ = target
-        self.inputs_ = inputs
-        return self
+        starts = [int(s) for s in np.cumsum([len(v) for v in ys])[:-1]]
+        return self._fit_checked(np.vstack(xs), np.concatenate(ys), names=list(features), target=target,
+                                 inputs=inputs, starts=starts)
 
     @property
     def filters_(self) -> tuple[F64, F64, F64]:
@@ -86,7 +82,5 @@ class HybridFilterNet(_Sequential):
         lr, ma, ar = self._inner.filters
         return np.asarray(lr), np.asarray(ma), np.asarray(ar)
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.HybridModel.from_json(json.dumps(state))
 
 

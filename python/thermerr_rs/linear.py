@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 from . import _core
 from ._arrays import F64
-from .base import Estimator
+from .base import Regressor
 
 
-class MLR(Estimator):
+class MLR(Regressor):
     """Ordinary least squares ``y = intercept_ + X @ coef_`` (the seeds' "multiple linear
     regression" baseline). Equals scikit-learn's ``LinearRegression`` on the same data.
 
@@ -18,10 +17,13 @@ class MLR(Estimator):
     """
 
     kind = "mlr"
+    _inner: _core.MlrModel | None = None
 
     def __init__(self, *, fit_intercept: bool = True) -> None:
         self.fit_intercept = fit_intercept
-        self._inner: _core.MlrModel | None = None
+
+    def _min_samples(self) -> int:
+        return 2 if self.fit_intercept else 1  # one sample cannot tell an intercept from slopes
 
     def _fit(self, x: F64, y: F64) -> None:
         self._inner = _core.MlrModel.fit(x, y, fit_intercept=bool(self.fit_intercept))
@@ -42,10 +44,4 @@ class MLR(Estimator):
         assert self._inner is not None
         return self._inner.intercept
 
-    def _state(self) -> dict[str, Any]:
-        assert self._inner is not None
-        state: dict[str, Any] = json.loads(self._inner.to_json())
-        return state
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.MlrModel.from_json(json.dumps(state))

@@ -5,15 +5,18 @@ residual band."""
 
 from __future__ import annotations
 
+import json
 import math
 import sys
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
+from sklearn.base import clone
 
 from ._arrays import F64, as_matrix, as_vector
-from .base import _WRAPPERS, Estimator
+from . import _core
+from .base import Estimator, Regressor, SequenceModel, _Wrapper
 from .errors import DataError, ParameterError
 
 
@@ -30,7 +33,9 @@ def iago(x1: Any) -> F64:
 
 @dataclass
 class MinMaxAGO:
-    """Min–max scaling to [0, 1] by given ranges, then 1-AGO; ``inverse`` undoes both."""
+    """Min–max scaling to [0, 1] by given ranges, then 1-AGO; ``inverse`` undoes both, for one
+    series (1-D) or one per column (2-D). The arithmetic is the core's, as in
+    :class:`AGORegressor` and on the edge: a series whose range has zero width maps to 0.5."""
 
     lo: F64
     hi: F64
@@ -38,63 +43,84 @@ class MinMaxAGO:
     @classmethod
     def fit(cls, x: Any) -> MinMaxAGO:
         a = np.asarray(x, dtype=np.float64)
-        lo, hi = a.min(axis=0), a.max(axis=0)
-        if np.any(hi - lo <= 0):
-            raise DataError("a constant series cannot be min-max normalised")
-        return cls(lo, hi)
+        if a.size == 0:
+            raise DataError("an empty series cannot be min-max normalised")
+        return cls(a.min(axis=0), a.max(axis=0))
+
+    def _column(self, j: int | None) -> Any:
+        lo, hi = (self.lo, self.hi) if j is None else (self.lo[j], self.hi[j])
+        doc = {"kind": "minmax_ago", "x_min": [float(lo)], "x_max": [float(hi)],
+               "y_min": float(lo), "y_max": float(hi)}
+        return _core.Preprocessing.from_json(json.dumps(doc), 1)
 
     def transform(self, x: Any) -> F64:
-        return ago((np.asarray(x, dtype=np.float64) - self.lo) / (self.hi - self.lo))
+        a = np.ascontiguousarray(x, dtype=np.float64)
+        if a.ndim == 1:
+            out: F64 = self._column(None).transform_target(a)
+            return out
+        return np.column_stack([self._column(j).transform_target(np.ascontiguousarray(a[:, j]))
+                                for j in range(a.shape[1])])
 
     def inverse(self, x1: Any) -> F64:
-        return iago(x1) * (self.hi - self.lo) + self.lo
+        a = np.ascontiguousarray(x1, dtype=np.float64)
+        if a.ndim == 1:
+            out: F64 = self._column(None).inverse(a)
+            return out
+        return np.column_stack([self._column(j).inverse(np.ascontiguousarray(a[:, j]))
+                                for j in range(a.shape[1])])
 
 
-class AGORegressor(Estimator):
-    """Wraps an estimator with seed 001's transform: it is fitted on the normalised, accumulated
-    inputs and target, and predicts by IAGO and de-normalisation.
+class _Preprocessed(_Wrapper, Estimator):
+    """An estimator fitted on preprocessed inputs (and target); the arithmetic is the core's
+    (``thermerr_core::artifact::Preprocessing``), the same the edge runs. A clone of
+    ``estimator`` is fitted (the estimator passed is left untouched). The file written by
+    ``save`` is the inner estimator's with a ``"preprocessing"`` entry, so the edge reads it.
 
-    The accumulation runs over time, so ``predict`` needs a contiguous sequence of samples from
-    the start of a run. The file written by ``save`` is the inner estimator's, with
-    ``"preprocessing": {"kind": "minmax_ago", "x_min", "x_max", "y_min", "y_max"}``.
-    """
+    Fitted attributes: ``estimator_`` (the fitted clone), ``pre_`` (the core's preprocessing,
+    with ``transform``, ``transform_target``, ``inverse``)."""
 
-    kind = ""
-    preprocessing_kind = "minmax_ago"
+    kind = ""  # not a model kind of its own: see ``preprocessing`` in the file
+    preprocessing_kind: ClassVar[str] = ""
 
     def __init__(self, estimator: Estimator) -> None:
         self.estimator = estimator
-        self._inner: Any = None
 
-    def _fit(self, x: F64, y: F64) -> None:
-        self.x_tf_ = MinMaxAGO.fit(x)
-        self.y_tf_ = MinMaxAGO.fit(y)
-        self.estimator.fit(np.ascontiguousarray(self.x_tf_.transform(x)), self.y_tf_.transform(y))
-        self._inner = self.estimator
+    @property
+    def estimator_(self) -> Estimator:
+        """The fitted clone of ``estimator``."""
+        self._check_fitted()
+        inner: Estimator = self._inner
+        return inner
+
+    def _min_samples(self) -> int:
+        return 2  # a training range needs two samples
+
+    def _fit(self, x: F64, y: Any) -> None:
+        self.pre_ = _core.Preprocessing.fit(self.preprocessing_kind, x, y)
+        inner = clone(self.estimator)
+        inner.fit(self.pre_.transform(x), self.pre_.transform_target(y))
+        self._inner = inner
 
     def _predict(self, x: F64) -> F64:
-        y1 = self.estimator.predict(np.ascontiguousarray(self.x_tf_.transform(x)))
-        out: F64 = self.y_tf_.inverse(y1)
+        out: F64 = self.pre_.inverse(self._inner._predict_columns(self.pre_.transform(x)))
         return out
 
-    def to_dict(self) -> dict[str, Any]:
-        self._check_fitted()
-        doc = self.estimator.to_dict()
-        doc.update(features=self.feature_names_in_, target=self.target_name_, inputs=self.inputs_)
-        doc["preprocessing"] = {
-            "kind": self.preprocessing_kind,
-            "x_min": [float(v) for v in self.x_tf_.lo],
-            "x_max": [float(v) for v in self.x_tf_.hi],
-            "y_min": float(self.y_tf_.lo),
-            "y_max": float(self.y_tf_.hi),
-        }
-        return doc
+    def _file_kind(self) -> str:
+        return self.estimator_._file_kind()
+
+    def _fitted(self) -> Any:
+        return self.estimator_._fitted()
+
+    def _header(self) -> dict[str, Any]:
+        head = self.estimator_._header()
+        head.update(features=self.feature_names_in_, target=self.target_name_, inputs=self.inputs_,
+                    preprocessing=json.loads(self.pre_.to_json()))
+        return head
 
     @classmethod
-    def _wrap_restored(cls, inner: Estimator, pre: dict[str, Any]) -> AGORegressor:
+    def _wrap_restored(cls, inner: Estimator, pre: Any) -> _Preprocessed:
         out = cls(inner)
-        out.x_tf_ = MinMaxAGO(as_matrix(pre["x_min"]).ravel(), as_matrix(pre["x_max"]).ravel())
-        out.y_tf_ = MinMaxAGO(np.float64(pre["y_min"]), np.float64(pre["y_max"]))  # type: ignore[arg-type]
+        out.pre_ = pre
         out._inner = inner
         out.n_features_in_ = inner.n_features_in_
         out.feature_names_in_ = inner.feature_names_in_
@@ -103,7 +129,28 @@ class AGORegressor(Estimator):
         return out
 
 
-_WRAPPERS[AGORegressor.preprocessing_kind] = AGORegressor
+class MinMaxScaled(_Preprocessed, Regressor):
+    """``estimator`` fitted on inputs min–max scaled to [0, 1] by the training ranges (a
+    constant column maps to 0.5).
+
+    MATLAB users know this as ``mapminmax`` before ``newrb``: RBF spreads are then comparable
+    across sensors. The file written by ``save`` is the inner estimator's, with
+    ``"preprocessing": {"kind": "minmax", "x_min": [...], "x_max": [...]}``.
+    """
+
+    preprocessing_kind = "minmax"
+
+
+class AGORegressor(_Preprocessed, SequenceModel):
+    """Wraps an estimator with seed 001's transform: it is fitted on the normalised, accumulated
+    inputs and target, and predicts by IAGO and de-normalisation.
+
+    The accumulation runs over time, so ``predict`` needs a contiguous sequence of samples from
+    the start of a run. The file written by ``save`` is the inner estimator's, with
+    ``"preprocessing": {"kind": "minmax_ago", "x_min", "x_max", "y_min", "y_max"}``.
+    """
+
+    preprocessing_kind = "minmax_ago"
 
 
 @dataclass(frozen=True)

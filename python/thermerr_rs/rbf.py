@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 from . import _core
 from ._arrays import F64
-from .base import Estimator
+from .base import Regressor
 
 
-class RBFNetwork(Estimator):
+class RBFNetwork(Regressor):
     """Gaussian hidden layer with MATLAB's ``radbas`` convention, φ(r) = exp(−(0.8326·r/spread)²)
     (φ = 0.5 at r = spread), and a linear output with a bias.
 
@@ -38,6 +37,7 @@ class RBFNetwork(Estimator):
     """
 
     kind = "rbf"
+    _inner: _core.RbfModel | None = None
 
     def __init__(
         self,
@@ -57,7 +57,6 @@ class RBFNetwork(Estimator):
         self.n_centers = n_centers
         self.seed = seed
         self.rule = rule
-        self._inner: _core.RbfModel | None = None
 
     def _fit(self, x: F64, y: F64) -> None:
         self._inner = _core.RbfModel.fit(
@@ -82,10 +81,4 @@ class RBFNetwork(Estimator):
     sse_history_ = property(lambda self: self._get("sse_history"))
     n_neurons_ = property(lambda self: int(self._get("centers").shape[0]))
 
-    def _state(self) -> dict[str, Any]:
-        assert self._inner is not None
-        state: dict[str, Any] = json.loads(self._inner.to_json())
-        return state
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.RbfModel.from_json(json.dumps(state))

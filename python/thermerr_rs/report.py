@@ -1,6 +1,6 @@
 """The diagnosis report: ``report.json``, the two machine TOMLs and ``report.html`` (a page a
-person reads: the verdict and its evidence first, then the plots, made with matplotlib and
-embedded in the page). Everything is rendered in memory first, then each file is written to a
+person reads: the verdict and its evidence first, then the plots, made with matplotlib when it is
+installed and embedded in the page). Everything is rendered in memory first, then each file is written to a
 temporary name and renamed into place, so a failure leaves no half-written report."""
 
 from __future__ import annotations
@@ -11,34 +11,43 @@ import io
 import json
 import os
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ._io import write_atomic
 
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
-def _png(fig: Any) -> str:
+NO_PLOTS = "<p>The plots need matplotlib: <code>pip install thermerr_rs[report]</code>.</p>"
+
+
+def _png(fig: Figure) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
     return base64.b64encode(buf.getvalue()).decode("ascii")
 
 
-def _plots(series: dict[str, Any], report: dict[str, Any]) -> list[tuple[str, str]]:
-    import matplotlib
+def _plots(series: dict[str, Any], report: dict[str, Any]) -> list[tuple[str, str]] | None:
+    """The figures as (title, base64 PNG); ``None`` without matplotlib. Drawn on ``Figure``
+    objects: no pyplot, so the caller's backend and open figures are left alone."""
+    try:
+        from matplotlib.figure import Figure
+    except ImportError:
+        return None
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    def axes(width: float, height: float) -> tuple[Figure, Axes]:
+        fig = Figure(figsize=(width, height))
+        return fig, fig.subplots()
 
     out = []
     t = np.asarray(series["time_s"]) / 3600.0
     axis = report["axis"]
     meas, base, ext = (np.asarray(series[k]) for k in ("measured", "baseline", "extended"))
     verdict = report["verdict"]
-    fig, ax = plt.subplots(figsize=(9, 3.6))
+    fig, ax = axes(9, 3.6)
     ax.plot(t, meas, ".", ms=2.5, color="0.35", label=f"measured {axis}")
     ax.plot(t, base, "-", color="tab:red", lw=1.3, label="calibrated model (baseline)")
     if verdict not in ("none", "unexplained"):
@@ -49,7 +58,7 @@ def _plots(series: dict[str, Any], report: dict[str, Any]) -> list[tuple[str, st
     ax.grid(alpha=0.3)
     out.append(("Held-out run: measured error and the models", _png(fig)))
 
-    fig, ax = plt.subplots(figsize=(9, 3.2))
+    fig, ax = axes(9, 3.2)
     ax.plot(t, meas - base, "-", color="tab:red", lw=1, label=f"baseline residual (RMS {report['baseline']['rmse_um']:.2f} µm)")
     if verdict not in ("none", "unexplained"):
         ax.plot(t, meas - ext, "-", color="tab:green", lw=1,
@@ -66,7 +75,7 @@ def _plots(series: dict[str, Any], report: dict[str, Any]) -> list[tuple[str, st
 
     cands = report.get("candidates", [])
     if cands:
-        fig, ax = plt.subplots(figsize=(9, 0.45 * len(cands) + 1.2))
+        fig, ax = axes(9, 0.45 * len(cands) + 1.2)
         cands = sorted(cands, key=lambda c: -c["gain_pct"])
 
         def label(c: dict[str, Any]) -> str:
@@ -85,7 +94,7 @@ def _plots(series: dict[str, Any], report: dict[str, Any]) -> list[tuple[str, st
         out.append(("Every candidate cause, scored on the held-out data", _png(fig)))
     extra = series.get("sensor")
     if extra:
-        fig, ax = plt.subplots(figsize=(9, 3.2))
+        fig, ax = axes(9, 3.2)
         ax.plot(t, extra["baseline_residual"], color="tab:red", lw=1, label="baseline")
         ax.plot(t, extra["extended_residual"], color="tab:green", lw=1, label="extended")
         ax.set_ylabel(f"{extra['column']} residual (°C)")
@@ -107,9 +116,10 @@ def render_html(report: dict[str, Any], series: dict[str, Any]) -> str:
         f"<td>{esc(json.dumps(c.get('parameters', {})))}</td></tr>"
         for c in report.get("candidates", [])
     )
-    figs = "".join(
+    plots = _plots(series, report)
+    figs = NO_PLOTS if plots is None else "".join(
         f"<figure><img alt='{esc(title)}' src='data:image/png;base64,{png}'><figcaption>{esc(title)}</figcaption></figure>"
-        for title, png in _plots(series, report)
+        for title, png in plots
     )
     b, e = report["baseline"], report["extended"]
     return f"""<!doctype html>

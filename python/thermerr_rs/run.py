@@ -10,7 +10,7 @@ import numpy as np
 
 from . import _core
 from ._arrays import F64
-from .errors import DataError, MissingColumnError
+from .errors import DataError, MissingColumnError, ParameterError
 
 NanPolicy = Literal["error", "drop", "interpolate"]
 
@@ -93,6 +93,17 @@ class Run:
         if not names:
             raise DataError("no columns asked for")
         return np.ascontiguousarray(np.column_stack([self[n] for n in names]))
+
+    def input_matrix(self, features: list[str], form: str = "absolute") -> F64:
+        """The model inputs built from the named columns: ``form="absolute"`` the readings as
+        they are, ``"rise"`` each reading minus the run's first sample (like the error itself,
+        which is relative to the run's start). What ``fit_run``/``predict_run`` feed a model."""
+        if form not in ("absolute", "rise"):
+            raise ParameterError(f'the input form must be "absolute" or "rise", got {form!r}')
+        x = self.matrix(features)
+        if form == "rise":
+            x = np.ascontiguousarray(x - x[0])
+        return x
 
     def slice(self, start: int | None = None, stop: int | None = None) -> Run:
         """Rows ``start:stop`` as a new run (time is kept as measured)."""

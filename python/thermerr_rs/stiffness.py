@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ._arrays import F64
-from .base import Estimator, _run_inputs
+from .base import Estimator
 from .errors import DataError, ModelFormatError, ParameterError
 
 
@@ -122,17 +122,19 @@ def key_thermal_stiffness(
             raise ParameterError(
                 f"at={at!r} s is outside the run ({run.time_s[0]:g} to {run.time_s[-1]:g} s)")
         k = int(np.argmin(np.abs(run.time_s - at)))
-    x = _run_inputs(run, list(feats), inputs)
-    pred = np.asarray(model.predict(x), dtype=np.float64)
+    x = run.input_matrix(list(feats), inputs)
+    # the columns are the model's own, in its order: predict without the feature-name warning
+    predict = model._predict_columns
+    pred = np.asarray(predict(x), dtype=np.float64)
     resid = pred - e
     band = (float(resid.min()), float(resid.max()))
     seq = np.ascontiguousarray(x[: k + 1])
-    base = float(model.predict(seq)[-1])
+    base = float(predict(seq)[-1])
     eps = np.empty(len(feats))
     for i in range(len(feats)):
         xs = seq.copy()
         xs[-1, i] += eta
-        eps[i] = float(model.predict(xs)[-1]) - e[k]
+        eps[i] = float(predict(xs)[-1]) - e[k]
     sens = (eps + e[k] - base) / eta
     with np.errstate(divide="ignore"):
         stiff = np.where(sens != 0, 1.0 / np.where(sens != 0, sens, 1.0), np.inf)

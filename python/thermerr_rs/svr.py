@@ -2,18 +2,17 @@
 
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import numpy as np
 
 from . import _core
 from ._arrays import F64
-from .base import Estimator
+from .base import Regressor
 from .errors import ParameterError
 
 
-class SVR(Estimator):
+class SVR(Regressor):
     """ε-SVR with scikit-learn's parameters and fitted attributes.
 
     The dual is solved by SMO exactly as LIBSVM (scikit-learn's ``SVR``) solves it: second-order
@@ -34,6 +33,7 @@ class SVR(Estimator):
     """
 
     kind = "svr"
+    _inner: _core.SvrModel | None = None
 
     def __init__(
         self,
@@ -55,7 +55,6 @@ class SVR(Estimator):
         self.shrinking = shrinking
         self.cache_size = cache_size
         self.max_iter = max_iter
-        self._inner: _core.SvrModel | None = None
 
     def _fit(self, x: F64, y: F64) -> None:
         gamma: str | float = self.gamma if isinstance(self.gamma, str) else float(self.gamma)
@@ -71,6 +70,15 @@ class SVR(Estimator):
     def _predict(self, x: F64) -> F64:
         assert self._inner is not None
         return self._inner.predict(x)
+
+    @classmethod
+    def _from_core(cls, inner: _core.SvrModel, n_features: int, **params: Any) -> SVR:
+        """An SVR of ``params`` around a model already fitted in Rust on ``n_features`` inputs
+        (:func:`thermerr_rs.tune_svr`'s refit on all the data)."""
+        model = cls(**params)
+        model._inner = inner
+        model.n_features_in_ = n_features
+        return model
 
     def _model(self) -> _core.SvrModel:
         self._check_fitted()
@@ -101,9 +109,4 @@ class SVR(Estimator):
     def gamma_(self) -> float | None:
         return self._model().gamma
 
-    def _state(self) -> dict[str, Any]:
-        state: dict[str, Any] = json.loads(self._model().to_json())
-        return state
 
-    def _restore(self, state: dict[str, Any]) -> None:
-        self._inner = _core.SvrModel.from_json(json.dumps(state))

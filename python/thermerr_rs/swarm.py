@@ -170,9 +170,7 @@ def tune_svr(
     finally:
         if bar is not None:
             bar.close()
-    model = SVR(C=c, epsilon=epsilon, gamma=g, tol=tol)
-    model._inner = inner
-    model.n_features_in_ = x.shape[1]
+    model = SVR._from_core(inner, x.shape[1], C=c, epsilon=epsilon, gamma=g, tol=tol)
     return TuneResult(float(c), float(g), float(mse), np.asarray(hist), int(n), model, folds)
 
 

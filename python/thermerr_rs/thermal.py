@@ -3,6 +3,7 @@ and diagnose what the simulation gets wrong."""
 
 from __future__ import annotations
 
+import json
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -153,22 +154,6 @@ def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: st
     d = machine._inner.diagnose(*_run_args(run), _run_args(holdout) if holdout is not None else None,
                                 axis=axis, holdout_fraction=holdout_fraction, min_score=min_score,
                                 noise_ratio=noise_ratio)
-    series = d.pop("series")
-    cal = Machine(_core.MachineModel.from_toml(d.pop("calibrated_toml"), "calibrated.toml"))
-    ext = Machine(_core.MachineModel.from_toml(d.pop("extended_toml"), "extended.toml"))
-    extra = {"calibration": d.pop("calibration")}
-    report = {
-        "axis": d["axis"],
-        "verdict": d["verdict"],
-        "column": d["column"],
-        "evidence": d["evidence"],
-        "baseline": d["baseline"],
-        "extended": d["extended"],
-        "gain_pct": d["gain_pct"],
-        "noise_um": d["noise_um"],
-        "holdout": d["holdout"],
-        "run": run.source,
-        "machine": machine._inner.file,
-        "candidates": d["candidates"],
-    }
-    return Diagnosis(report, series, cal, ext, extra)
+    cal = Machine(_core.MachineModel.from_toml(d["calibrated_toml"], "calibrated.toml"))
+    ext = Machine(_core.MachineModel.from_toml(d["extended_toml"], "extended.toml"))
+    return Diagnosis(json.loads(d["report"]), d["series"], cal, ext, {"calibration": d["calibration"]})

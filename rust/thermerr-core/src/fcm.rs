@@ -839,6 +839,26 @@ impl FuzzyCMeans {
         self.centers.ncols()
     }
 
+    /// Checks a partition read from a file.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::Format(format!("fcm model: {m}")));
+        if self.centers.nrows() == 0 || self.centers.ncols() == 0 {
+            return bad("no cluster centres".into());
+        }
+        if !(self.m > 1.0 && self.m.is_finite()) {
+            return bad(format!("fuzziness m must be > 1, got {}", self.m));
+        }
+        if self.membership.ncols() != self.centers.nrows() && self.membership.nrows() > 0 {
+            return bad(format!(
+                "memberships over {} clusters for {} centres",
+                self.membership.ncols(),
+                self.centers.nrows()
+            ));
+        }
+        crate::samples::require_finite_model("fcm", "centers", &self.centers.data)?;
+        crate::samples::require_finite_model("fcm", "membership", &self.membership.data)
+    }
+
     /// Hard labels of the fitted objects: the cluster of largest membership (first on ties).
     pub fn labels(&self) -> Vec<usize> {
         hard_labels(&self.membership)

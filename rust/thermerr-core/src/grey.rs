@@ -257,11 +257,23 @@ impl GreyBpModel {
                 self.windows, self.n_temps
             )));
         }
+        let state = self.w_max().saturating_mul(self.n_temps + 1);
+        if state > crate::artifact::MAX_STATE_VALUES {
+            return Err(Error::Format(format!(
+                "greybp model: windows {:?} over {} temperatures would keep {state} values per run (at most {})",
+                self.windows,
+                self.n_temps,
+                crate::artifact::MAX_STATE_VALUES
+            )));
+        }
         if self.gm_min.len() != k || self.gm_max.len() != k {
             return Err(Error::Format(
                 "greybp model: one GM range per window".into(),
             ));
         }
+        crate::samples::require_finite_model("greybp", "gm_min", &self.gm_min)?;
+        crate::samples::require_finite_model("greybp", "gm_max", &self.gm_max)?;
+        crate::samples::require_finite_model("greybp", "y_min/y_max", &[self.y_min, self.y_max])?;
         match &self.net {
             Some(net) => {
                 net.validate().map_err(Error::Format)?;

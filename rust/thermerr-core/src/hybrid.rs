@@ -96,12 +96,27 @@ impl HybridModel {
         if m == 0 || self.ma_lags == 0 {
             return bad("needs temperatures and at least one MA lag".into());
         }
-        if self.lr.len() != m + 1 || self.ma.len() != 1 + self.ma_lags * m {
+        let state = self.ma_lags.saturating_mul(m).saturating_add(self.ar_lags);
+        if state > crate::artifact::MAX_STATE_VALUES {
+            return bad(format!(
+                "{} MA lags over {m} temperatures and {} AR lags would keep {state} values per run (at most {})",
+                self.ma_lags,
+                self.ar_lags,
+                crate::artifact::MAX_STATE_VALUES
+            ));
+        }
+        if Some(self.lr.len()) != m.checked_add(1)
+            || Some(self.ma.len()) != self.ma_lags.checked_mul(m).and_then(|v| v.checked_add(1))
+        {
             return bad("LR or MA coefficient count does not match".into());
         }
-        if self.ar.len() != 3 + self.ar_lags {
+        if Some(self.ar.len()) != self.ar_lags.checked_add(3) {
             return bad("AR coefficient count does not match".into());
         }
+        for (name, v) in [("lr", &self.lr), ("ma", &self.ma), ("ar", &self.ar)] {
+            crate::samples::require_finite_model("hybrid", name, v)?;
+        }
+        crate::samples::require_finite_model("hybrid", "c_y", &[self.c_y])?;
         match (&self.net, self.variant) {
             (None, Variant::Arma) => Ok(()),
             (Some(net), v) if v != Variant::Arma => {

@@ -8,6 +8,7 @@
 //! no rayon): `thermerr-edge` uses exactly that, so the edge and the library share one `predict`
 //! per model kind.
 
+pub mod artifact;
 pub mod error;
 #[cfg(feature = "fit")]
 pub mod fcm;

@@ -86,6 +86,15 @@ impl LinearRegression {
         self.coef.len()
     }
 
+    /// Checks a model read from a file.
+    pub fn validate(&self) -> Result<()> {
+        if self.coef.is_empty() {
+            return Err(crate::Error::Format("mlr model: no coefficients".into()));
+        }
+        crate::samples::require_finite_model("mlr", "coef", &self.coef)?;
+        crate::samples::require_finite_model("mlr", "intercept", &[self.intercept])
+    }
+
     /// Predicts one sample.
     #[inline]
     pub fn predict_one(&self, x: &[f64]) -> f64 {

@@ -34,6 +34,11 @@ pub struct Scores {
 /// Default "near zero" threshold for the mean accuracy, as a share of max |e|.
 pub const DEFAULT_ZERO_FRACTION: f64 = 0.05;
 
+/// Root mean square of a series (0 for an empty one).
+pub fn rms(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
+}
+
 /// Scores `predicted` against `measured`. `zero_tol` is the |e| at or below which a sample is left
 /// out of the mean accuracy; `None` takes 5 % of max |e|.
 pub fn scores(measured: &[f64], predicted: &[f64], zero_tol: Option<f64>) -> Result<Scores> {

@@ -97,14 +97,18 @@ impl Mlp {
             return Err("network: one weight matrix and bias vector per layer".into());
         }
         for k in 0..l - 1 {
-            if self.weights[k].len() != self.sizes[k] * self.sizes[k + 1]
+            if Some(self.weights[k].len()) != self.sizes[k].checked_mul(self.sizes[k + 1])
                 || self.biases[k].len() != self.sizes[k + 1]
             {
                 return Err(format!("network layer {k}: wrong weight or bias count"));
             }
         }
-        if !self.output_scale.is_finite() {
-            return Err("network: output_scale must be finite".into());
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        if !self.output_scale.is_finite()
+            || !self.weights.iter().all(|w| finite(w))
+            || !self.biases.iter().all(|b| finite(b))
+        {
+            return Err("network: weights, biases and output_scale must be finite".into());
         }
         Ok(())
     }
@@ -168,6 +172,10 @@ impl BpModel {
         if self.x_max.len() != self.x_min.len() || self.net.n_inputs() != self.x_min.len() {
             return Err("bp model: input ranges do not match the network".into());
         }
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        if !finite(&self.x_min) || !finite(&self.x_max) || !finite(&[self.y_min, self.y_max]) {
+            return Err("bp model: scaling ranges must be finite".into());
+        }
         Ok(())
     }
 
@@ -180,12 +188,7 @@ impl BpModel {
     pub fn predict_one(&self, x: &[f64], scratch: &mut [f64]) -> f64 {
         let (xs, s) = scratch.split_at_mut(self.n_features());
         for (j, v) in xs.iter_mut().enumerate() {
-            let span = self.x_max[j] - self.x_min[j];
-            *v = if span > 0.0 {
-                (x[j] - self.x_min[j]) / span
-            } else {
-                0.5
-            };
+            *v = scale01(x[j], self.x_min[j], self.x_max[j]);
         }
         self.net.predict_one(xs, s) * (self.y_max - self.y_min) + self.y_min
     }

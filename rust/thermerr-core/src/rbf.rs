@@ -370,6 +370,27 @@ impl RbfNetwork {
         self.centers.ncols()
     }
 
+    /// Checks a model read from a file: one weight per centre, a positive spread, finite numbers.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(crate::Error::Format(format!("rbf model: {m}")));
+        if self.centers.ncols() == 0 {
+            return bad("centres with no features".into());
+        }
+        if self.weights.len() != self.centers.nrows() {
+            return bad(format!(
+                "{} weights for {} centres",
+                self.weights.len(),
+                self.centers.nrows()
+            ));
+        }
+        if !(self.spread > 0.0 && self.spread.is_finite()) {
+            return bad(format!("spread must be > 0, got {}", self.spread));
+        }
+        crate::samples::require_finite_model("rbf", "centers", &self.centers.data)?;
+        crate::samples::require_finite_model("rbf", "weights", &self.weights)?;
+        crate::samples::require_finite_model("rbf", "bias", &[self.bias])
+    }
+
     /// One sample, no allocation.
     #[inline]
     pub fn predict_one(&self, x: &[f64]) -> f64 {

@@ -100,6 +100,17 @@ pub fn check_target(y: &[f64], n: usize) -> Result<()> {
     check_finite(y, 1, "y")
 }
 
+/// Refuses a model file whose `field` holds a non-finite number (serde_json reads `1e999` as
+/// infinity).
+pub fn require_finite_model(kind: &str, field: &str, v: &[f64]) -> crate::Result<()> {
+    match v.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(crate::Error::Format(format!(
+            "{kind} model: {field}[{i}] is not a finite number"
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// An owned row-major matrix, serialised as `{"shape": [r, c], "data": [...]}`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "RawMatrix")]

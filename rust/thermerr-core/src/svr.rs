@@ -79,6 +79,36 @@ impl SvrModel {
         self.support_vectors.ncols()
     }
 
+    /// Checks a model read from a file: one dual coefficient (and training index, if any) per
+    /// support vector, a positive γ, finite numbers.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(crate::Error::Format(format!("svr model: {m}")));
+        let n_sv = self.support_vectors.nrows();
+        if self.support_vectors.ncols() == 0 {
+            return bad("support vectors with no features".into());
+        }
+        if self.dual_coef.len() != n_sv {
+            return bad(format!(
+                "{} dual coefficients for {n_sv} support vectors",
+                self.dual_coef.len()
+            ));
+        }
+        if !self.support.is_empty() && self.support.len() != n_sv {
+            return bad(format!(
+                "{} support indices for {n_sv} support vectors",
+                self.support.len()
+            ));
+        }
+        if let Kernel::Rbf { gamma } = self.kernel {
+            if !(gamma > 0.0 && gamma.is_finite()) {
+                return bad(format!("gamma must be > 0, got {gamma}"));
+            }
+        }
+        crate::samples::require_finite_model("svr", "support_vectors", &self.support_vectors.data)?;
+        crate::samples::require_finite_model("svr", "dual_coef", &self.dual_coef)?;
+        crate::samples::require_finite_model("svr", "intercept", &[self.intercept])
+    }
+
     /// One sample, no allocation; the sum runs over the support vectors in order, as LIBSVM's.
     #[inline]
     pub fn predict_one(&self, x: &[f64]) -> f64 {

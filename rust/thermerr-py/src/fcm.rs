@@ -9,7 +9,7 @@ use crate::{matrix_to_py, samples, vec_to_py, PyErrWrap};
 /// A fitted fuzzy c-means partition (the Python `FuzzyCMeans` estimator holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "FcmModel")]
 pub struct PyFcmModel {
-    inner: FuzzyCMeans,
+    pub(crate) inner: FuzzyCMeans,
 }
 
 fn labels_to_py(py: Python<'_>, l: Vec<usize>) -> Bound<'_, PyArray1<i64>> {
@@ -120,17 +120,6 @@ impl PyFcmModel {
     #[getter]
     fn n_features(&self) -> usize {
         self.inner.n_features()
-    }
-
-    fn to_json(&self) -> PyResult<String> {
-        crate::to_json(&self.inner)
-    }
-
-    #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        Ok(PyFcmModel {
-            inner: crate::from_json(text)?,
-        })
     }
 }
 

@@ -12,10 +12,7 @@ use crate::{samples, slice1, vec_to_py, PyErrWrap};
 /// A fitted rolling GM(1,N) (+ BP) model.
 #[pyclass(frozen, module = "thermerr_rs._core", name = "GreyModel")]
 pub struct PyGreyModel {
-    inner: GreyBpModel,
-    /// Unused: the history is in `inner`; kept while `from_json` still fills it.
-    #[allow(dead_code)]
-    history: Vec<f64>,
+    pub(crate) inner: GreyBpModel,
 }
 
 #[pymethods]
@@ -51,10 +48,7 @@ impl PyGreyModel {
         let inner = py
             .detach(|| params.check()?.fit(xs, ys))
             .map_err(PyErrWrap)?;
-        Ok(PyGreyModel {
-            inner,
-            history: Vec::new(),
-        })
+        Ok(PyGreyModel { inner })
     }
 
     /// The GM(1,N) of one window alone (seed 002's "GM").
@@ -71,10 +65,7 @@ impl PyGreyModel {
         let inner = py
             .detach(|| params.check()?.fit(xs, ys))
             .map_err(PyErrWrap)?;
-        Ok(PyGreyModel {
-            inner,
-            history: Vec::new(),
-        })
+        Ok(PyGreyModel { inner })
     }
 
     /// Closed loop, or one step ahead from the measured errors `y` (y[k−1] enters at step k).
@@ -103,20 +94,6 @@ impl PyGreyModel {
     #[getter]
     fn n_features(&self) -> usize {
         self.inner.n_features()
-    }
-
-    fn to_json(&self) -> PyResult<String> {
-        crate::to_json(&self.inner)
-    }
-
-    #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        let inner: GreyBpModel = crate::from_json(text)?;
-        inner.validate().map_err(PyErrWrap)?;
-        Ok(PyGreyModel {
-            inner,
-            history: Vec::new(),
-        })
     }
 }
 
@@ -151,10 +128,7 @@ fn gm1n_window<'py>(
 /// A fitted BP network regressor (min–max scaled inputs and output).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "BpModel")]
 pub struct PyBpModel {
-    inner: BpModel,
-    /// Unused: the history is in `inner`; kept while `from_json` still fills it.
-    #[allow(dead_code)]
-    history: Vec<f64>,
+    pub(crate) inner: BpModel,
 }
 
 #[pymethods]
@@ -192,10 +166,7 @@ impl PyBpModel {
         let inner = py
             .detach(|| params.check()?.fit(xs, ys))
             .map_err(PyErrWrap)?;
-        Ok(PyBpModel {
-            inner,
-            history: Vec::new(),
-        })
+        Ok(PyBpModel { inner })
     }
 
     fn predict<'py>(
@@ -216,20 +187,6 @@ impl PyBpModel {
     #[getter]
     fn n_features(&self) -> usize {
         self.inner.n_features()
-    }
-
-    fn to_json(&self) -> PyResult<String> {
-        crate::to_json(&self.inner)
-    }
-
-    #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        let inner: BpModel = crate::from_json(text)?;
-        inner.validate().map_err(|e| PyErrWrap(Error::Format(e)))?;
-        Ok(PyBpModel {
-            inner,
-            history: Vec::new(),
-        })
     }
 }
 

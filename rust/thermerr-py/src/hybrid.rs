@@ -10,10 +10,7 @@ use crate::{samples, slice1, vec_to_py, PyErrWrap};
 /// A fitted filter model (the Python `HybridFilterNet` holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "HybridModel")]
 pub struct PyHybridModel {
-    inner: HybridModel,
-    /// Unused: the history is in `inner`; kept while `from_json` still fills it.
-    #[allow(dead_code)]
-    history: Vec<f64>,
+    pub(crate) inner: HybridModel,
 }
 
 #[pymethods]
@@ -58,10 +55,7 @@ impl PyHybridModel {
         let inner = py
             .detach(|| params.check()?.fit(xs, ys, &starts))
             .map_err(PyErrWrap)?;
-        Ok(PyHybridModel {
-            inner,
-            history: Vec::new(),
-        })
+        Ok(PyHybridModel { inner })
     }
 
     /// Closed loop, or one step ahead from the measured errors `y` (y[k−1] enters at step k).
@@ -95,20 +89,6 @@ impl PyHybridModel {
     #[getter]
     fn n_features(&self) -> usize {
         self.inner.n_features()
-    }
-
-    fn to_json(&self) -> PyResult<String> {
-        crate::to_json(&self.inner)
-    }
-
-    #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        let inner: HybridModel = crate::from_json(text)?;
-        inner.validate().map_err(PyErrWrap)?;
-        Ok(PyHybridModel {
-            inner,
-            history: Vec::new(),
-        })
     }
 }
 

@@ -1,6 +1,7 @@
 //! `thermerr_rs._core`: thin pyo3 wrappers over `thermerr-core`. Inputs are extracted first,
 //! then every kernel runs inside one `py.detach` so long work releases the GIL.
 
+mod artifact;
 mod error;
 mod fcm;
 mod grey;
@@ -71,6 +72,8 @@ pub(crate) fn vec_to_py(py: Python<'_>, v: Vec<f64>) -> Bound<'_, PyArray1<f64>>
 #[pymodule(gil_used = false)]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("FORMAT_VERSION", thermerr_core::artifact::FORMAT_VERSION)?;
+    artifact::register(m)?;
     run::register(m)?;
     linear::register(m)?;
     fcm::register(m)?;
@@ -82,23 +85,4 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     hybrid::register(m)?;
     params::register(m)?;
     Ok(())
-}
-
-/// Serialises a fitted model to JSON, refusing non-finite numbers (JSON cannot carry them).
-pub(crate) fn to_json<T: serde::Serialize>(model: &T) -> PyResult<String> {
-    let text = serde_json::to_string(model)
-        .map_err(|e| PyErrWrap(thermerr_core::Error::Format(e.to_string())))?;
-    if text.contains("null") {
-        return Err(PyErrWrap(thermerr_core::Error::Format(
-            "the model holds a non-finite number and cannot be saved".into(),
-        ))
-        .into());
-    }
-    Ok(text)
-}
-
-/// Reads a fitted model back from the JSON [`to_json`] wrote.
-pub(crate) fn from_json<T: serde::de::DeserializeOwned>(text: &str) -> PyResult<T> {
-    serde_json::from_str(text)
-        .map_err(|e| PyErrWrap(thermerr_core::Error::Format(e.to_string())).into())
 }

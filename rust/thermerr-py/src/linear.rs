@@ -10,7 +10,7 @@ use crate::{samples, slice1, vec_to_py, PyErrWrap};
 /// A fitted linear model (the Python `MLR` estimator holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "MlrModel")]
 pub struct PyMlrModel {
-    inner: LinearRegression,
+    pub(crate) inner: LinearRegression,
 }
 
 #[pymethods]
@@ -54,17 +54,6 @@ impl PyMlrModel {
     #[getter]
     fn n_features(&self) -> usize {
         self.inner.n_features()
-    }
-
-    fn to_json(&self) -> PyResult<String> {
-        crate::to_json(&self.inner)
-    }
-
-    #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        Ok(PyMlrModel {
-            inner: crate::from_json(text)?,
-        })
     }
 }
 

@@ -12,7 +12,7 @@ use crate::{matrix_to_py, samples, slice1, vec_to_py, PyErrWrap};
 /// A fitted RBF network (the Python `RBFNetwork` holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "RbfModel")]
 pub struct PyRbfModel {
-    inner: RbfNetwork,
+    pub(crate) inner: RbfNetwork,
 }
 
 #[pymethods]
@@ -85,17 +85,6 @@ impl PyRbfModel {
     #[getter]
     fn n_features(&self) -> usize {
         self.inner.n_features()
-    }
-
-    fn to_json(&self) -> PyResult<String> {
-        crate::to_json(&self.inner)
-    }
-
-    #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        Ok(PyRbfModel {
-            inner: crate::from_json(text)?,
-        })
     }
 }
 

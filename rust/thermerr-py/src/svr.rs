@@ -111,17 +111,6 @@ impl PySvrModel {
     fn n_features(&self) -> usize {
         self.inner.n_features()
     }
-
-    fn to_json(&self) -> PyResult<String> {
-        crate::to_json(&self.inner)
-    }
-
-    #[staticmethod]
-    fn from_json(text: &str) -> PyResult<Self> {
-        Ok(PySvrModel {
-            inner: crate::from_json(text)?,
-        })
-    }
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

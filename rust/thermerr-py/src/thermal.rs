@@ -4,10 +4,10 @@ use std::path::PathBuf;
 
 use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::PyDict;
 use thermerr_core::run::Run;
 use thermerr_core::thermal::calibrate::{calibrate, CalibrationOptions};
-use thermerr_core::thermal::diagnose::{diagnose, Candidate, DiagnoseOptions, Holdout};
+use thermerr_core::thermal::diagnose::{diagnose, Cause, DiagnoseOptions, Verdict};
 use thermerr_core::thermal::{simulate, Init, Machine, RunView};
 
 use crate::{slice1, vec_to_py, PyErrWrap};
@@ -208,7 +208,8 @@ impl PyMachine {
         ))
     }
 
-    /// The full diagnosis; returns a dict (report fields, series, calibrated/extended TOML).
+    /// The full diagnosis; returns a dict: `report` (report.json as JSON text), `calibration`
+    /// (the baseline's fit figures), `series` and the calibrated/extended TOML.
     #[pyo3(signature = (source, time, names, data, holdout = None, *, axis = None, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn diagnose<'py>(
@@ -254,28 +255,17 @@ impl PyMachine {
                 diagnose(&self.inner, &view, hview.as_ref(), &opts)
             })
             .map_err(PyErrWrap)?;
-        let fig = |h: &Holdout| -> PyResult<Bound<'py, PyDict>> {
-            let d = PyDict::new(py);
-            d.set_item("rmse_um", h.rmse_um)?;
-            d.set_item("max_abs_um", h.max_abs_um)?;
-            d.set_item("band_um", h.band_um)?;
-            Ok(d)
-        };
         let out = PyDict::new(py);
-        out.set_item("axis", &diag.axis)?;
-        out.set_item("verdict", &diag.verdict)?;
-        out.set_item("column", &diag.column)?;
-        out.set_item("evidence", &diag.evidence)?;
-        out.set_item("noise_um", diag.noise_um)?;
-        out.set_item("baseline", fig(&diag.baseline_holdout)?)?;
-        out.set_item("extended", fig(diag.extended_holdout())?)?;
-        out.set_item("gain_pct", diag.gain_pct())?;
-        out.set_item("holdout", &diag.holdout_label)?;
-        let cands = PyList::empty(py);
-        for c in &diag.candidates {
-            cands.append(candidate_dict(py, c)?)?;
-        }
-        out.set_item("candidates", cands)?;
+        let report = serde_json::to_string(&diag.report(&self.file))
+            .map_err(|e| PyErrWrap(thermerr_core::Error::Format(e.to_string())))?;
+        out.set_item("report", report)?;
+        let cal = PyDict::new(py);
+        cal.set_item("bic", diag.baseline.bic())?;
+        cal.set_item("sigma_t", diag.baseline.sigma_t)?;
+        cal.set_item("sigma_e", diag.baseline.sigma_e)?;
+        cal.set_item("n_iter", diag.baseline.n_iter)?;
+        cal.set_item("converged", diag.baseline.converged)?;
+        out.set_item("calibration", cal)?;
         out.set_item(
             "calibrated_toml",
             diag.baseline.machine.to_toml().map_err(PyErrWrap)?,
@@ -284,66 +274,24 @@ impl PyMachine {
             "extended_toml",
             diag.extended().to_toml().map_err(PyErrWrap)?,
         )?;
+        let (base, ext) = (&diag.baseline_holdout, diag.extended_holdout());
         let series = PyDict::new(py);
         series.set_item("time_s", vec_to_py(py, diag.holdout_time.clone()))?;
         series.set_item("measured", vec_to_py(py, diag.holdout_measured.clone()))?;
-        series.set_item(
-            "baseline",
-            vec_to_py(py, diag.baseline_holdout.predicted.clone()),
-        )?;
-        series.set_item(
-            "extended",
-            vec_to_py(py, diag.extended_holdout().predicted.clone()),
-        )?;
-        if let Some(col) = diag
-            .column
-            .as_ref()
-            .filter(|_| diag.verdict == "sensor_drift")
-        {
-            let find = |h: &Holdout| {
-                h.sensor_residuals
-                    .iter()
-                    .find(|(c, _)| c == col)
-                    .map(|(_, r)| r.clone())
-            };
-            if let (Some(b), Some(e)) =
-                (find(&diag.baseline_holdout), find(diag.extended_holdout()))
-            {
+        series.set_item("baseline", vec_to_py(py, base.predicted.clone()))?;
+        series.set_item("extended", vec_to_py(py, ext.predicted.clone()))?;
+        if let (Verdict::Cause(Cause::SensorDrift), Some(col)) = (diag.verdict, &diag.column) {
+            if let (Some(b), Some(e)) = (base.sensor_residual(col), ext.sensor_residual(col)) {
                 let s = PyDict::new(py);
                 s.set_item("column", col)?;
-                s.set_item("baseline_residual", vec_to_py(py, b))?;
-                s.set_item("extended_residual", vec_to_py(py, e))?;
+                s.set_item("baseline_residual", vec_to_py(py, b.to_vec()))?;
+                s.set_item("extended_residual", vec_to_py(py, e.to_vec()))?;
                 series.set_item("sensor", s)?;
             }
         }
         out.set_item("series", series)?;
-        let base = PyDict::new(py);
-        base.set_item("bic", diag.baseline.bic())?;
-        base.set_item("sigma_t", diag.baseline.sigma_t)?;
-        base.set_item("sigma_e", diag.baseline.sigma_e)?;
-        base.set_item("n_iter", diag.baseline.n_iter)?;
-        base.set_item("converged", diag.baseline.converged)?;
-        out.set_item("calibration", base)?;
         Ok(out)
     }
-}
-
-fn candidate_dict<'py>(py: Python<'py>, c: &Candidate) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("cause", &c.cause)?;
-    d.set_item("column", &c.column)?;
-    d.set_item("node", &c.node)?;
-    d.set_item("score", c.score)?;
-    d.set_item("gain_pct", c.gain_pct)?;
-    d.set_item("delta_bic", c.delta_bic)?;
-    d.set_item("sensor_gain_pct", c.sensor_gain_pct)?;
-    d.set_item("rmse_um", c.holdout.rmse_um)?;
-    let p = PyDict::new(py);
-    for (k, v) in &c.parameters {
-        p.set_item(k, v)?;
-    }
-    d.set_item("parameters", p)?;
-    Ok(d)
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -1,0 +1,196 @@
+//! A loaded model file with its per-run state: what `thermerr-edge` runs sample by sample, and
+//! what the library runs over a whole series (`predict_series`), through the same code.
+
+use super::{Artifact, Inputs, Model, Preprocessing};
+use crate::error::{Error, Result};
+use crate::grey::GreyState;
+use crate::hybrid::HybridState;
+
+/// Per-run state and scratch space of a model, sized at load time.
+#[derive(Clone, Debug)]
+enum ModelState {
+    None,
+    Scratch(Vec<f64>),
+    Grey(Box<GreyState>),
+    Hybrid(Box<HybridState>),
+}
+
+impl ModelState {
+    fn new(m: &Model) -> Self {
+        match m {
+            Model::Bp(b) => ModelState::Scratch(vec![0.0; b.scratch_len()]),
+            Model::GreyBp(g) | Model::Gm1n(g) => ModelState::Grey(Box::new(GreyState::new(g))),
+            Model::Hybrid(h) => ModelState::Hybrid(Box::new(HybridState::new(h))),
+            _ => ModelState::None,
+        }
+    }
+
+    fn reset(&mut self) {
+        match self {
+            ModelState::Grey(s) => s.reset(),
+            ModelState::Hybrid(s) => s.reset(),
+            _ => {}
+        }
+    }
+}
+
+/// One sample through the family's own predict code (no allocation on success).
+#[inline]
+fn predict_model(
+    model: &Model,
+    state: &mut ModelState,
+    x: &[f64],
+    measured_prev: Option<f64>,
+) -> Result<f64> {
+    Ok(match (model, state) {
+        (Model::Mlr(m), _) => m.predict_one(x),
+        (Model::Rbf(m), _) => m.predict_one(x),
+        (Model::Svr(m), _) => m.predict_one(x),
+        (Model::Bp(m), ModelState::Scratch(s)) => m.predict_one(x, s),
+        (Model::GreyBp(m) | Model::Gm1n(m), ModelState::Grey(s)) => s.push(m, x, measured_prev)?,
+        (Model::Hybrid(m), ModelState::Hybrid(s)) => s.push(m, x, measured_prev)?,
+        _ => return Err(Error::Format("model state does not match its kind".into())),
+    })
+}
+
+/// A validated model file with its per-run state (inputs as rises, 1-AGO accumulation, the
+/// grey and filter models' past outputs), in buffers sized when it is built.
+#[derive(Clone, Debug)]
+pub struct Predictor {
+    artifact: Artifact,
+    // per-run state
+    first: Vec<f64>,
+    have_first: bool,
+    acc: Vec<f64>,
+    y1_prev: f64,
+    buf: Vec<f64>,
+    state: ModelState,
+}
+
+impl Predictor {
+    pub fn new(artifact: Artifact) -> Self {
+        let n = artifact.n_features();
+        Predictor {
+            state: ModelState::new(&artifact.model),
+            artifact,
+            first: vec![0.0; n],
+            have_first: false,
+            acc: vec![0.0; n],
+            y1_prev: 0.0,
+            buf: vec![0.0; n],
+        }
+    }
+
+    /// Reads and validates the text of a model file.
+    pub fn from_json(text: &str) -> Result<Self> {
+        Ok(Self::new(Artifact::from_json(text)?))
+    }
+
+    pub fn artifact(&self) -> &Artifact {
+        &self.artifact
+    }
+
+    pub fn model(&self) -> &Model {
+        &self.artifact.model
+    }
+
+    pub fn kind(&self) -> &'static str {
+        self.artifact.model.kind()
+    }
+
+    pub fn n_features(&self) -> usize {
+        self.buf.len()
+    }
+
+    /// The run columns the model reads, in order (if it was fitted on a run).
+    pub fn features(&self) -> Option<&[String]> {
+        self.artifact.header.features.as_deref()
+    }
+
+    /// The error column the model predicts (e.g. `E_z`), if recorded.
+    pub fn target(&self) -> Option<&str> {
+        self.artifact.header.target.as_deref()
+    }
+
+    /// Whether predictions depend on earlier samples of the run.
+    pub fn stateful(&self) -> bool {
+        let h = &self.artifact.header;
+        h.inputs == Inputs::Rise
+            || h.preprocessing
+                .as_ref()
+                .is_some_and(Preprocessing::accumulates)
+            || self.artifact.model.sequential()
+    }
+
+    /// Forgets the run so far: the next sample starts a new run.
+    pub fn reset(&mut self) {
+        self.have_first = false;
+        self.acc.iter_mut().for_each(|v| *v = 0.0);
+        self.y1_prev = 0.0;
+        self.state.reset();
+    }
+
+    /// Predicts the next sample of the run (one reading per feature, in the model's order).
+    /// Models that use past errors (grey, filter models) feed back their own previous output:
+    /// closed loop, as a compensating controller runs. Allocates nothing unless it fails.
+    pub fn predict_sample(&mut self, x: &[f64]) -> Result<f64> {
+        self.predict_sample_measured(x, None)
+    }
+
+    /// As [`Predictor::predict_sample`], with the measured error of the previous sample when it
+    /// is known (one step ahead, for models that use past errors; ignored by the others).
+    pub fn predict_sample_measured(
+        &mut self,
+        x: &[f64],
+        measured_prev: Option<f64>,
+    ) -> Result<f64> {
+        let n = self.buf.len();
+        if x.len() != n {
+            return Err(Error::Shape(format!(
+                "the model takes {n} features, got {}",
+                x.len()
+            )));
+        }
+        if let Some(j) = x.iter().position(|v| !v.is_finite()) {
+            return Err(Error::Shape(format!(
+                "feature {j} is not a finite number ({})",
+                x[j]
+            )));
+        }
+        let rise = self.artifact.header.inputs == Inputs::Rise;
+        if rise && !self.have_first {
+            self.first.copy_from_slice(x);
+            self.have_first = true;
+        }
+        for (j, b) in self.buf.iter_mut().enumerate() {
+            *b = if rise { x[j] - self.first[j] } else { x[j] };
+        }
+        let (model, state) = (&self.artifact.model, &mut self.state);
+        let Some(pre) = &self.artifact.header.preprocessing else {
+            return predict_model(model, state, &self.buf, measured_prev);
+        };
+        pre.scale_row(&mut self.buf);
+        if pre.accumulates() {
+            for (b, a) in self.buf.iter_mut().zip(&mut self.acc) {
+                *a += *b;
+                *b = *a;
+            }
+        }
+        let y1 = predict_model(model, state, &self.buf, measured_prev)?;
+        let y = pre.output(y1, self.y1_prev);
+        self.y1_prev = y1;
+        Ok(y)
+    }
+
+    /// A whole run (row-major, `n_features` per row) from its first sample: closed loop, or one
+    /// step ahead from the measured errors. Starts a new run first.
+    pub fn predict_series(&mut self, x: &[f64], measured: Option<&[f64]>) -> Result<Vec<f64>> {
+        self.reset();
+        let m = self.n_features();
+        let out = crate::sequence::run_series(x, m, measured, |row, prev| {
+            self.predict_sample_measured(row, prev)
+        });
+        self.reset();
+        out
+    }
+}

@@ -1,0 +1,263 @@
+//! The extended machines, one per cause and place, and their calibration.
+
+use super::cause::Cause;
+use super::score::{self, HeldOut};
+use super::{Candidate, Holdout};
+use crate::error::Result;
+use crate::thermal::calibrate::{
+    calibrate, default_params, Calibration, CalibrationOptions, FreeParam, Param,
+};
+use crate::thermal::machine::{Ambient, InputTerm, LinkSpec, Machine, NodeSpec};
+use crate::thermal::sim::RunView;
+
+/// One extension before fitting: the extended machine and its extra free parameters.
+#[derive(Clone, Debug)]
+pub struct Spec {
+    pub cause: Cause,
+    pub column: Option<String>,
+    pub node: Option<String>,
+    pub machine: Machine,
+    pub extra: Vec<FreeParam>,
+}
+
+impl Spec {
+    fn new(cause: Cause, machine: Machine, extra: Vec<FreeParam>) -> Self {
+        Spec {
+            cause,
+            column: None,
+            node: None,
+            machine,
+            extra,
+        }
+    }
+}
+
+/// A positive parameter searched in log space within `[lo, hi]`.
+fn log_param(param: Param, lo: f64, hi: f64, start: f64) -> FreeParam {
+    FreeParam {
+        param,
+        log: true,
+        lo: lo.ln(),
+        hi: hi.ln(),
+        start: start.ln(),
+        prior: None,
+    }
+}
+
+fn linear_param(param: Param, lo: f64, hi: f64, start: f64) -> FreeParam {
+    FreeParam {
+        param,
+        log: false,
+        lo,
+        hi,
+        start,
+        prior: None,
+    }
+}
+
+pub(super) fn thermal_lag(m: &Machine, axis: usize) -> Spec {
+    let mut lag = m.clone();
+    lag.drift[axis].lag_s = Some(1200.0);
+    Spec::new(
+        Cause::ThermalLag,
+        lag,
+        vec![log_param(Param::Lag(axis), 30.0, 30000.0, 1200.0)],
+    )
+}
+
+/// Only for a measured ambient: a constant one is absorbed by the drift map's offset.
+pub(super) fn ambient_coupling(m: &Machine, axis: usize) -> Option<Spec> {
+    if !matches!(m.ambient, Ambient::Column(_)) {
+        return None;
+    }
+    let mut amb = m.clone();
+    amb.drift[axis].ambient_um_per_k = Some(0.0);
+    Some(Spec::new(Cause::AmbientCoupling, amb, Vec::new()))
+}
+
+/// One per input that drives a source and moves in the run.
+pub(super) fn speed_growth(m: &Machine, axis: usize, run: &RunView<'_>) -> Vec<Spec> {
+    let mut inputs: Vec<&str> = m.sources.iter().map(|s| s.input.as_str()).collect();
+    inputs.sort_unstable();
+    inputs.dedup();
+    let mut out = Vec::new();
+    for input in inputs {
+        let Ok(u) = run.col(input) else { continue };
+        let umax = u.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+        if umax <= 0.0 {
+            continue;
+        }
+        let mut sg = m.clone();
+        sg.drift[axis].inputs.push(InputTerm {
+            input: input.to_string(),
+            um: 0.0,
+            reference: umax,
+            exponent: 2.0,
+        });
+        let k = sg.drift[axis].inputs.len() - 1;
+        out.push(Spec::new(
+            Cause::SpeedGrowth,
+            sg,
+            vec![linear_param(Param::InputExponent(axis, k), 0.5, 3.0, 2.0)],
+        ));
+    }
+    out
+}
+
+/// One per unused `T_*` column × simulated node: the column as a boundary node linked to it.
+pub(super) fn unmodeled_source(m: &Machine, run: &RunView<'_>) -> Vec<Spec> {
+    let used: Vec<String> = m.columns().into_iter().map(|(c, _)| c).collect();
+    let mut free_cols: Vec<String> = run
+        .cols_with_prefix("T_")
+        .into_iter()
+        .filter(|c| !used.contains(c))
+        .collect();
+    free_cols.sort();
+    let mut out = Vec::new();
+    for col in &free_cols {
+        for node in m.nodes.iter().filter(|n| n.boundary.is_none()) {
+            let mut src = m.clone();
+            let name = format!("source_{}", col.trim_start_matches("T_"));
+            src.nodes.push(NodeSpec {
+                name: name.clone(),
+                capacity_j_per_k: 1.0,
+                ambient_w_per_k: 0.0,
+                sensor: None,
+                boundary: Some(col.clone()),
+                sensor_offset_k: 0.0,
+                sensor_drift_k_per_h: 0.0,
+            });
+            src.links.push(LinkSpec {
+                between: [node.name.clone(), name],
+                w_per_k: 1.0,
+            });
+            let k = src.links.len() - 1;
+            out.push(Spec {
+                column: Some(col.clone()),
+                node: Some(node.name.clone()),
+                ..Spec::new(
+                    Cause::UnmodeledSource,
+                    src,
+                    vec![log_param(Param::Link(k), 0.01, 200.0, 1.0)],
+                )
+            });
+        }
+    }
+    out
+}
+
+/// One per simulated node of the drift map.
+pub(super) fn nonlinear_expansion(m: &Machine, axis: usize) -> Vec<Spec> {
+    let mut out = Vec::new();
+    for name in m.drift[axis].um_per_k.keys() {
+        let Some(i) = m.node_index(name) else {
+            continue;
+        };
+        if m.nodes[i].boundary.is_some() {
+            continue;
+        }
+        let mut q = m.clone();
+        q.drift[axis].quadratic_um_per_k2.insert(name.clone(), 0.0);
+        out.push(Spec {
+            node: Some(name.clone()),
+            ..Spec::new(Cause::NonlinearExpansion, q, Vec::new())
+        });
+    }
+    out
+}
+
+/// One per sensed simulated node.
+pub(super) fn sensor_drift(m: &Machine) -> Vec<Spec> {
+    let mut out = Vec::new();
+    for (i, node) in m.nodes.iter().enumerate() {
+        if let (Some(col), None) = (&node.sensor, &node.boundary) {
+            out.push(Spec {
+                column: Some(col.clone()),
+                node: Some(node.name.clone()),
+                ..Spec::new(
+                    Cause::SensorDrift,
+                    m.clone(),
+                    vec![linear_param(Param::SensorDrift(i), -3.0, 3.0, 0.0)],
+                )
+            });
+        }
+    }
+    out
+}
+
+/// What every candidate is fitted and scored against.
+pub(super) struct Baseline<'a> {
+    pub calibration: &'a Calibration,
+    pub holdout: &'a Holdout,
+    /// Calibration options of the extensions (the baseline's noise levels).
+    pub options: CalibrationOptions,
+    pub axis_index: usize,
+}
+
+/// The start of a search from the calibrated baseline's values (where the spec's machine has
+/// them; extension parameters keep their own start).
+fn warm_start(mut free: Vec<FreeParam>, base: &Calibration) -> Vec<FreeParam> {
+    let mb = &base.machine;
+    for fp in free.iter_mut() {
+        let v = match fp.param {
+            Param::InitOffset(i) => Some(base.init[i]),
+            Param::Capacity(i) => mb.nodes.get(i).map(|n| n.capacity_j_per_k),
+            Param::AmbientG(i) => mb.nodes.get(i).map(|n| n.ambient_w_per_k),
+            Param::Link(k) => mb.links.get(k).map(|l| l.w_per_k),
+            Param::SourceW(k) => mb.sources.get(k).map(|s| s.w),
+            Param::SourceExponent(k) => mb.sources.get(k).map(|s| s.exponent),
+            _ => None,
+        };
+        if let Some(v) = v {
+            fp.start = if fp.log { v.ln() } else { v };
+        }
+    }
+    free
+}
+
+/// Calibrates one extension on `train` and scores it on the held-out data.
+pub(super) fn fit(
+    spec: Spec,
+    base: &Baseline<'_>,
+    train: &RunView<'_>,
+    held: &HeldOut<'_, '_>,
+) -> Result<Candidate> {
+    let with_extra = |mut f: Vec<FreeParam>| {
+        f.extend(spec.extra.iter().cloned());
+        f
+    };
+    let nominal = default_params(&spec.machine, &base.options);
+    let warm = with_extra(warm_start(nominal.clone(), base.calibration));
+    let mut cal = calibrate(&spec.machine, train, &base.options, Some(warm))?;
+    if spec.cause == Cause::SensorDrift {
+        // a drifting sensor biases the baseline itself: also fit from the nominal start
+        let cold = calibrate(
+            &spec.machine,
+            train,
+            &base.options,
+            Some(with_extra(nominal)),
+        )?;
+        if cold.ssr < cal.ssr {
+            cal = cold;
+        }
+    }
+    let h = score::holdout(&cal, held)?;
+    let sensor_gain_pct = match (spec.cause, &spec.column) {
+        (Cause::SensorDrift, Some(col)) => score::sensor_gain_pct(base.holdout, &h, col),
+        _ => None,
+    };
+    Ok(Candidate {
+        cause: spec.cause,
+        parameters: spec
+            .cause
+            .parameters(&cal.machine, base.axis_index, spec.node.as_deref()),
+        column: spec.column,
+        node: spec.node,
+        delta_bic: cal.bic() - base.calibration.bic(),
+        gain_pct: score::gain_pct(base.holdout, &h),
+        score: score::joint_score(base.holdout, &h),
+        sensor_gain_pct,
+        holdout: h,
+        calibration: cal,
+    })
+}

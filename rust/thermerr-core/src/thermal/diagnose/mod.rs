@@ -1,0 +1,360 @@
+//! Diagnosis: calibrate the nominal machine (the baseline), then for every cause of the
+//! catalogue fit the extension that models it, score everything on held-out data, and name the
+//! cause whose extension explains the held-out residual — or `none` when the baseline already
+//! leaves only noise, or `unexplained` when a structured residual remains that no extension
+//! removes.
+//!
+//! [`cause`] is the catalogue, [`candidates`] builds and fits the extended machines, [`score`]
+//! measures them on the held-out data, [`verdict`] applies the rule and [`evidence`] words it.
+
+pub mod candidates;
+pub mod cause;
+pub mod evidence;
+pub mod score;
+pub mod verdict;
+
+use std::collections::BTreeMap;
+
+use rayon::prelude::*;
+use serde::{Serialize, Serializer};
+
+pub use cause::Cause;
+pub use verdict::Verdict;
+
+use super::calibrate::{calibrate, Calibration, CalibrationOptions};
+use super::machine::Machine;
+use super::sim::RunView;
+use crate::error::{Error, Result};
+use candidates::Baseline;
+use score::HeldOut;
+
+/// Options of [`diagnose`].
+#[derive(Clone, Debug)]
+pub struct DiagnoseOptions {
+    /// Error axis (default: the machine's first drift entry).
+    pub axis: Option<String>,
+    /// Share of the run held out (its end) when no separate held-out run is given.
+    pub holdout_fraction: f64,
+    /// Samples of a separate held-out run used to estimate its initial state.
+    pub init_window: usize,
+    /// A candidate must improve the held-out score by at least this to be named.
+    pub min_score: f64,
+    /// A baseline whose held-out RMS is within this many noise levels is "none".
+    pub noise_ratio: f64,
+    pub calibration: CalibrationOptions,
+}
+
+impl Default for DiagnoseOptions {
+    fn default() -> Self {
+        DiagnoseOptions {
+            axis: None,
+            holdout_fraction: 0.3,
+            init_window: 20,
+            min_score: 0.1,
+            noise_ratio: 2.0,
+            calibration: CalibrationOptions::default(),
+        }
+    }
+}
+
+/// Figures of one model on the held-out data; serialises as the report's three figures.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Holdout {
+    pub rmse_um: f64,
+    pub max_abs_um: f64,
+    pub band_um: f64,
+    /// Σ of squared normalised residuals (error axis and sensed temperatures).
+    #[serde(skip)]
+    pub joint_ssr: f64,
+    /// Predicted error on the held-out rows.
+    #[serde(skip)]
+    pub predicted: Vec<f64>,
+    /// (column, predicted − measured reading) per sensor on the held-out rows.
+    #[serde(skip)]
+    pub sensor_residuals: Vec<(String, Vec<f64>)>,
+}
+
+impl Holdout {
+    /// The held-out temperature residual of sensor column `col`.
+    pub fn sensor_residual(&self, col: &str) -> Option<&[f64]> {
+        self.sensor_residuals
+            .iter()
+            .find(|(c, _)| c == col)
+            .map(|(_, r)| r.as_slice())
+    }
+}
+
+/// One extension, fitted and scored; serialises as a report candidate (formats.md).
+#[derive(Clone, Debug, Serialize)]
+pub struct Candidate {
+    pub cause: Cause,
+    pub column: Option<String>,
+    pub node: Option<String>,
+    /// 1 − √(joint SSR_ext / joint SSR_base) on held-out data: the share of the normalised
+    /// held-out residual (error and temperatures) the extension removes.
+    pub score: f64,
+    /// 100 · (1 − RMS_ext / RMS_base) of the error axis on held-out data.
+    pub gain_pct: f64,
+    pub delta_bic: f64,
+    /// For sensor drift: the gain on that sensor's held-out temperature residual (%).
+    pub sensor_gain_pct: Option<f64>,
+    #[serde(rename = "rmse_um", serialize_with = "rmse_only")]
+    pub holdout: Holdout,
+    pub parameters: BTreeMap<String, f64>,
+    #[serde(skip)]
+    pub calibration: Calibration,
+}
+
+fn rmse_only<S: Serializer>(h: &Holdout, s: S) -> std::result::Result<S::Ok, S::Error> {
+    s.serialize_f64(h.rmse_um)
+}
+
+/// The outcome of [`diagnose`]; [`Diagnosis::report`] is its serialised form.
+#[derive(Clone, Debug)]
+pub struct Diagnosis {
+    pub axis: String,
+    pub verdict: Verdict,
+    pub column: Option<String>,
+    pub evidence: String,
+    pub noise_um: f64,
+    pub baseline: Calibration,
+    pub baseline_holdout: Holdout,
+    /// Sorted by score, best first.
+    pub candidates: Vec<Candidate>,
+    /// Index in `candidates` of the named cause, if any.
+    pub chosen: Option<usize>,
+    /// The training run's source.
+    pub run: String,
+    /// The held-out description and its time axis and measured error.
+    pub holdout_label: String,
+    pub holdout_time: Vec<f64>,
+    pub holdout_measured: Vec<f64>,
+}
+
+/// The fields of `report.json` (formats.md, "Diagnosis report"), in their order.
+#[derive(Serialize)]
+pub struct Report<'a> {
+    pub axis: &'a str,
+    pub verdict: Verdict,
+    pub column: Option<&'a str>,
+    pub evidence: &'a str,
+    pub baseline: &'a Holdout,
+    pub extended: &'a Holdout,
+    pub gain_pct: f64,
+    pub noise_um: f64,
+    pub holdout: &'a str,
+    pub run: &'a str,
+    pub machine: &'a str,
+    pub candidates: &'a [Candidate],
+}
+
+impl Diagnosis {
+    /// The extended machine: the chosen candidate's, or the baseline when nothing was named.
+    pub fn extended(&self) -> &Machine {
+        self.chosen
+            .map(|i| &self.candidates[i].calibration.machine)
+            .unwrap_or(&self.baseline.machine)
+    }
+
+    pub fn extended_holdout(&self) -> &Holdout {
+        self.chosen
+            .map(|i| &self.candidates[i].holdout)
+            .unwrap_or(&self.baseline_holdout)
+    }
+
+    pub fn gain_pct(&self) -> f64 {
+        self.chosen.map_or(0.0, |i| self.candidates[i].gain_pct)
+    }
+
+    /// The report; `machine` names the machine file.
+    pub fn report<'a>(&'a self, machine: &'a str) -> Report<'a> {
+        Report {
+            axis: &self.axis,
+            verdict: self.verdict,
+            column: self.column.as_deref(),
+            evidence: &self.evidence,
+            baseline: &self.baseline_holdout,
+            extended: self.extended_holdout(),
+            gain_pct: self.gain_pct(),
+            noise_um: self.noise_um,
+            holdout: &self.holdout_label,
+            run: &self.run,
+            machine,
+            candidates: &self.candidates,
+        }
+    }
+}
+
+/// Runs the whole diagnosis. `hold`: a separate held-out run; without one the last
+/// `holdout_fraction` of `train` is held out (the model still runs through it from the start,
+/// but nothing there is fitted).
+pub fn diagnose(
+    m: &Machine,
+    train: &RunView<'_>,
+    hold: Option<&RunView<'_>>,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis> {
+    let axis = match &opts.axis {
+        Some(a) => a.clone(),
+        None => m
+            .drift
+            .first()
+            .map(|d| d.axis.clone())
+            .ok_or_else(|| Error::param("axis", "the machine has no [[drift]] entry"))?,
+    };
+    let axis_index = m.drift.iter().position(|d| d.axis == axis).ok_or_else(|| {
+        Error::param(
+            "axis",
+            format!("the machine has no drift entry for `{axis}`"),
+        )
+    })?;
+    let n = train.len();
+    let split = if hold.is_some() {
+        n
+    } else {
+        if !(0.05..=0.8).contains(&opts.holdout_fraction) {
+            return Err(Error::param("holdout_fraction", "must be within 0.05..0.8"));
+        }
+        ((n as f64) * (1.0 - opts.holdout_fraction)).round() as usize
+    };
+    let held = HeldOut {
+        run: hold.unwrap_or(train),
+        from: if hold.is_some() { 0 } else { split },
+        window: opts.init_window,
+        axis: &axis,
+    };
+    let mut copts = opts.calibration.clone();
+    copts.axis = axis.clone();
+    copts.fit_rows = Some(split);
+    let baseline = calibrate(m, train, &copts, None)?;
+    let base_hold = score::holdout(&baseline, &held)?;
+    let base = Baseline {
+        calibration: &baseline,
+        holdout: &base_hold,
+        options: CalibrationOptions {
+            sigma_t: Some(baseline.sigma_t),
+            sigma_e: Some(baseline.sigma_e),
+            ..copts
+        },
+        axis_index,
+    };
+    // extensions are built on the nominal machine, so that bounds and priors are the baseline's
+    // (centred on the user's estimate); the search starts from the calibrated values
+    let specs: Vec<_> = Cause::ALL
+        .into_iter()
+        .flat_map(|c| c.specs(m, axis_index, train))
+        .collect();
+    let mut cands = specs
+        .into_par_iter()
+        .map(|spec| candidates::fit(spec, &base, train, &held))
+        .collect::<Result<Vec<_>>>()?;
+    cands.sort_by(|a, b| b.score.total_cmp(&a.score));
+    let noise = baseline.sigma_e;
+    let (verdict, chosen) = verdict::rule(&cands, &base_hold, noise, opts);
+    let evidence = match chosen {
+        Some(i) => evidence::named(&cands, i, &base_hold, &axis),
+        None => evidence::unnamed(verdict, &cands, &base_hold, noise, &axis, opts.min_score),
+    };
+    let (holdout_label, holdout_time, holdout_measured) = match hold {
+        Some(h) => (
+            format!("the separate run {}", h.source),
+            h.time.to_vec(),
+            h.col(&axis)?.to_vec(),
+        ),
+        None => (
+            format!(
+                "the last {:.0} % of {} ({} of {} samples)",
+                100.0 * opts.holdout_fraction,
+                train.source,
+                n - split,
+                n
+            ),
+            train.time[split..].to_vec(),
+            train.col(&axis)?[split..].to_vec(),
+        ),
+    };
+    Ok(Diagnosis {
+        column: chosen.and_then(|i| cands[i].column.clone()),
+        axis,
+        verdict,
+        evidence,
+        noise_um: noise,
+        baseline,
+        baseline_holdout: base_hold,
+        candidates: cands,
+        chosen,
+        run: train.source.clone(),
+        holdout_label,
+        holdout_time,
+        holdout_measured,
+    })
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// The baseline held-out RMS of the constructed candidates.
+    const BASE_RMSE: f64 = 2.55;
+
+    fn holdout(rmse_um: f64) -> Holdout {
+        Holdout {
+            rmse_um,
+            ..Holdout::default()
+        }
+    }
+
+    pub fn baseline() -> Holdout {
+        holdout(BASE_RMSE)
+    }
+
+    /// A scored candidate against a baseline of [`BASE_RMSE`] µm.
+    pub fn candidate(cause: Cause, score: f64, rmse_um: f64, delta_bic: f64) -> Candidate {
+        let machine = Machine::from_toml(
+            "name = \"one\"\nambient = 20.0\n[[nodes]]\nname = \"a\"\ncapacity_j_per_k = 1000.0\nambient_w_per_k = 2.0\n[[drift]]\naxis = \"E_z\"\num_per_k = { a = 1.0 }\n",
+            "one.toml",
+        )
+        .unwrap();
+        let holdout = holdout(rmse_um);
+        Candidate {
+            cause,
+            column: None,
+            node: None,
+            score,
+            gain_pct: score::gain_pct(&baseline(), &holdout),
+            delta_bic,
+            sensor_gain_pct: None,
+            holdout,
+            parameters: BTreeMap::new(),
+            calibration: Calibration {
+                machine,
+                init: Vec::new(),
+                sigma_t: 0.1,
+                sigma_e: 0.1,
+                ssr: 1.0,
+                n_data: 1,
+                n_params: 1,
+                n_iter: 1,
+                converged: true,
+            },
+        }
+    }
+
+    #[test]
+    fn a_candidate_serialises_as_the_report_fields() {
+        let c = candidate(Cause::SensorDrift, 0.5, 1.0, -20.0);
+        let v = serde_json::to_string(&c).unwrap();
+        assert!(
+            v.starts_with(
+                r#"{"cause":"sensor_drift","column":null,"node":null,"score":0.5,"gain_pct":"#
+            ),
+            "{v}"
+        );
+        assert!(
+            v.ends_with(
+                r#""delta_bic":-20.0,"sensor_gain_pct":null,"rmse_um":1.0,"parameters":{}}"#
+            ),
+            "{v}"
+        );
+    }
+}

@@ -1,0 +1,87 @@
+//! Held-out figures of a calibrated machine, and how a candidate compares with the baseline.
+
+use super::Holdout;
+use crate::error::{Error, Result};
+use crate::metrics;
+use crate::thermal::calibrate::{evaluate, fit_initial_offsets, targets, Calibration};
+use crate::thermal::sim::RunView;
+
+/// The held-out data: rows `from..` of `run`, simulated from its start.
+pub(super) struct HeldOut<'r, 'a> {
+    pub run: &'r RunView<'a>,
+    pub from: usize,
+    /// Readings used to estimate the initial state.
+    pub window: usize,
+    pub axis: &'r str,
+}
+
+/// Scores a calibrated machine on the held-out data.
+pub(super) fn holdout(cal: &Calibration, held: &HeldOut<'_, '_>) -> Result<Holdout> {
+    let (m, run, from) = (&cal.machine, held.run, held.from);
+    // the start is estimated from the first readings, as `Machine.simulate(run, fit_initial=N)`
+    // does, so the reported figures can be reproduced from the written TOML alone
+    let init = fit_initial_offsets(m, run, held.window)?;
+    let tg = targets(m, run, held.axis)?;
+    let (_, sim, _) = evaluate(
+        m,
+        &init,
+        run,
+        &tg,
+        run.len(),
+        cal.sigma_t,
+        cal.sigma_e,
+        false,
+    )?;
+    let e = &sim.drift[tg.axis_index].1;
+    if from >= run.len() {
+        return Err(Error::Shape("the held-out part is empty".into()));
+    }
+    let fig = metrics::scores(&tg.measured_e[from..], &e[from..], None)?;
+    let mut joint: f64 = (from..run.len())
+        .map(|k| ((tg.measured_e[k] - e[k]) / cal.sigma_e).powi(2))
+        .sum();
+    let nn = m.nodes.len();
+    let mut sensor_residuals = Vec::new();
+    for &(i, meas_t) in &tg.sensors {
+        let node = &m.nodes[i];
+        let res: Vec<f64> = (from..run.len())
+            .map(|k| {
+                sim.temps[k * nn + i]
+                    + node.sensor_offset_k
+                    + node.sensor_drift_k_per_h * (run.time[k] - run.time[0]) / 3600.0
+                    - meas_t[k]
+            })
+            .collect();
+        joint += res.iter().map(|v| (v / cal.sigma_t).powi(2)).sum::<f64>();
+        sensor_residuals.push((node.sensor.clone().unwrap_or_default(), res));
+    }
+    Ok(Holdout {
+        rmse_um: fig.rms,
+        max_abs_um: fig.max_abs,
+        band_um: fig.band,
+        joint_ssr: joint,
+        predicted: e[from..].to_vec(),
+        sensor_residuals,
+    })
+}
+
+/// 100 · (1 − RMS_ext / RMS_base) of the error axis.
+pub(super) fn gain_pct(base: &Holdout, ext: &Holdout) -> f64 {
+    100.0 * (1.0 - ext.rmse_um / base.rmse_um.max(1e-300))
+}
+
+/// 1 − √(joint SSR_ext / joint SSR_base).
+pub(super) fn joint_score(base: &Holdout, ext: &Holdout) -> f64 {
+    1.0 - (ext.joint_ssr / base.joint_ssr.max(1e-300)).sqrt()
+}
+
+/// The gain (%) on the held-out temperature residual of sensor `col`.
+pub(super) fn sensor_gain_pct(base: &Holdout, ext: &Holdout, col: &str) -> Option<f64> {
+    match (base.sensor_residual(col), ext.sensor_residual(col)) {
+        (Some(b), Some(e)) => {
+            let (b, e) = (metrics::rms(b), metrics::rms(e));
+            (b > 0.0).then(|| 100.0 * (1.0 - e / b))
+        }
+        _ => None,
+    }
+}

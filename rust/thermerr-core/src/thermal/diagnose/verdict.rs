@@ -1,0 +1,131 @@
+//! The rule that names a cause, or says `none` or `unexplained`.
+
+use std::fmt;
+
+use serde::{Serialize, Serializer};
+
+use super::cause::Cause;
+use super::{Candidate, DiagnoseOptions, Holdout};
+
+/// A candidate must improve the training fit by at least this much BIC (ΔBIC below it).
+pub const MAX_DELTA_BIC: f64 = -10.0;
+
+/// What the diagnosis concludes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Verdict {
+    /// The cause whose extension explains the held-out residual.
+    Cause(Cause),
+    /// The baseline already leaves only noise.
+    None,
+    /// A structured residual remains that no extension removes.
+    Unexplained,
+}
+
+impl Verdict {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Verdict::Cause(c) => c.as_str(),
+            Verdict::None => "none",
+            Verdict::Unexplained => "unexplained",
+        }
+    }
+}
+
+impl fmt::Display for Verdict {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl Serialize for Verdict {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}
+
+/// Whether a candidate may be named at all: it improves the training fit, removes part of the
+/// joint held-out residual, and lowers the held-out RMS of the error axis.
+pub fn supported(c: &Candidate) -> bool {
+    c.delta_bic < MAX_DELTA_BIC && c.score > 0.0 && c.gain_pct > 0.0
+}
+
+/// The verdict and the index of the named candidate in `cands` (sorted by score, best first):
+/// the best supported candidate if its score reaches `min_score`; otherwise `none` when the
+/// baseline's held-out RMS is within `noise_ratio` noise levels, else `unexplained`.
+pub fn rule(
+    cands: &[Candidate],
+    base: &Holdout,
+    noise_um: f64,
+    opts: &DiagnoseOptions,
+) -> (Verdict, Option<usize>) {
+    match cands.iter().position(supported) {
+        Some(i) if cands[i].score >= opts.min_score => (Verdict::Cause(cands[i].cause), Some(i)),
+        _ if base.rmse_um / noise_um <= opts.noise_ratio => (Verdict::None, None),
+        _ => (Verdict::Unexplained, None),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::tests::{baseline, candidate};
+    use super::*;
+
+    #[test]
+    fn names_the_best_supported_candidate() {
+        let base = baseline();
+        let cands = [
+            candidate(Cause::ThermalLag, 0.6, 1.0, -50.0),
+            candidate(Cause::SensorDrift, 0.3, 2.0, -50.0),
+        ];
+        let opts = DiagnoseOptions::default();
+        assert_eq!(
+            rule(&cands, &base, 0.1, &opts),
+            (Verdict::Cause(Cause::ThermalLag), Some(0))
+        );
+    }
+
+    #[test]
+    fn never_names_a_cause_that_raises_the_error() {
+        // the kJ/K machine: the joint residual falls, the error axis gets worse
+        let base = baseline();
+        let worse = candidate(Cause::UnmodeledSource, 0.45, 6.81, -400.0);
+        let opts = DiagnoseOptions::default();
+        assert_eq!(
+            rule(std::slice::from_ref(&worse), &base, 0.1, &opts),
+            (Verdict::Unexplained, None)
+        );
+        assert_eq!(
+            rule(std::slice::from_ref(&worse), &base, 2.0, &opts),
+            (Verdict::None, None)
+        );
+        // the next supported candidate is named instead
+        let lag = candidate(Cause::ThermalLag, 0.2, 2.0, -30.0);
+        assert_eq!(
+            rule(&[worse, lag], &base, 0.1, &opts),
+            (Verdict::Cause(Cause::ThermalLag), Some(1))
+        );
+    }
+
+    #[test]
+    fn needs_the_bic_and_the_score() {
+        let base = baseline();
+        let opts = DiagnoseOptions::default();
+        for c in [
+            candidate(Cause::ThermalLag, 0.5, 1.0, -5.0),
+            candidate(Cause::ThermalLag, 0.05, 1.0, -50.0),
+        ] {
+            assert_eq!(rule(&[c], &base, 0.1, &opts).0, Verdict::Unexplained);
+        }
+    }
+
+    #[test]
+    fn serialises_as_its_name() {
+        for (v, name) in [
+            (Verdict::Cause(Cause::SpeedGrowth), "\"speed_growth\""),
+            (Verdict::None, "\"none\""),
+            (Verdict::Unexplained, "\"unexplained\""),
+        ] {
+            assert_eq!(serde_json::to_string(&v).unwrap(), name);
+        }
+    }
+}
