@@ -111,7 +111,7 @@ pub(crate) fn parse_name<T: Copy>(param: &'static str, s: &str, names: &[(&str, 
 
 /// Asserts that every name of a parameter enum parses (`FromStr`) and deserialises (serde) to
 /// the same value, and that serde writes it back under the first name given for it.
-#[cfg(test)]
+#[cfg(all(test, feature = "fit"))]
 pub(crate) fn assert_names_agree<T>(names: &[(&str, T)])
 where
     T: std::str::FromStr<Err = Error>
