@@ -170,7 +170,7 @@ fn check_partition(u: &Matrix, c: usize) -> Result<()> {
 
 /// A fitted fuzzy c-means partition.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct FuzzyCMeans {
+pub struct FcmModel {
     /// Weighting exponent used (needed to compute memberships of new objects).
     pub m: f64,
     /// Cluster centres, `n_clusters × n_features`.
@@ -189,7 +189,7 @@ pub struct FuzzyCMeans {
 
 impl FcmValidParams {
     /// Runs fuzzy c-means on the rows of `x`.
-    pub fn fit(&self, x: Samples<'_>) -> Result<FuzzyCMeans> {
+    pub fn fit(&self, x: Samples<'_>) -> Result<FcmModel> {
         x.require_finite("X")?;
         let (n, c) = (x.nrows(), self.n_clusters);
         if c > n {
@@ -236,7 +236,7 @@ fn gram_run(
     u0: Vec<f64>,
     tol: f64,
     max_iter: usize,
-) -> Result<FuzzyCMeans> {
+) -> Result<FcmModel> {
     let (n, d) = (x.nrows(), x.ncols());
     let mut mean = vec![0.0; d];
     for r in x.rows() {
@@ -337,11 +337,11 @@ fn fitted(
     n_iter: usize,
     history: Vec<f64>,
     converged: bool,
-) -> Result<FuzzyCMeans> {
+) -> Result<FcmModel> {
     if let Err(e) = check_finite(&u, c, "membership") {
         return Err(Error::Numerical(format!("fuzzy c-means diverged ({e})")));
     }
-    Ok(FuzzyCMeans {
+    Ok(FcmModel {
         m,
         centers: Matrix {
             shape: [c, d],
@@ -414,7 +414,7 @@ impl<'a> Fcm<'a> {
         }
     }
 
-    fn run(mut self, u0: Vec<f64>, tol: f64, max_iter: usize) -> Result<FuzzyCMeans> {
+    fn run(mut self, u0: Vec<f64>, tol: f64, max_iter: usize) -> Result<FcmModel> {
         let (n, d, c, m) = (self.x.nrows(), self.x.ncols(), self.c, self.m);
         // scikit-fuzzy clips the initial partition before its first comparison
         let mut u_prev: Vec<f64> = u0.iter().map(|v| v.max(EPS)).collect();
@@ -830,7 +830,7 @@ fn sweep_generic<K: Kernel>(
     }
 }
 
-impl FuzzyCMeans {
+impl FcmModel {
     pub fn n_clusters(&self) -> usize {
         self.centers.nrows()
     }
@@ -944,7 +944,7 @@ mod tests {
         fn is_send_sync<T: Send + Sync>() {}
         is_send_sync::<FcmParams>();
         is_send_sync::<FcmValidParams>();
-        is_send_sync::<FuzzyCMeans>();
+        is_send_sync::<FcmModel>();
     }
 
     #[test]
@@ -1074,7 +1074,7 @@ mod tests {
             .unwrap()
             .fit(s)
             .unwrap();
-        let back: FuzzyCMeans = serde_json::from_str(&serde_json::to_string(&f).unwrap()).unwrap();
+        let back: FcmModel = serde_json::from_str(&serde_json::to_string(&f).unwrap()).unwrap();
         assert_eq!(f, back);
     }
 }

@@ -9,7 +9,7 @@ use crate::linalg::lstsq;
 use crate::samples::check_target;
 use crate::samples::Samples;
 
-/// Hyper-parameters of [`LinearRegression`]; a consuming builder with defaults, checked by
+/// Hyper-parameters of [`MlrModel`]; a consuming builder with defaults, checked by
 /// [`MlrParams::check`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct MlrParams(MlrValidParams);
@@ -48,7 +48,7 @@ impl MlrParams {
 
 /// A fitted linear model y = b + Σ_j w_j x_j.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct LinearRegression {
+pub struct MlrModel {
     pub coef: Vec<f64>,
     pub intercept: f64,
 }
@@ -57,7 +57,7 @@ pub struct LinearRegression {
 impl MlrValidParams {
     /// Fits by least squares on centred data, as scikit-learn's `LinearRegression` does (centring
     /// keeps the intercept out of the conditioning of the design matrix).
-    pub fn fit(&self, x: Samples<'_>, y: &[f64]) -> Result<LinearRegression> {
+    pub fn fit(&self, x: Samples<'_>, y: &[f64]) -> Result<MlrModel> {
         x.require_finite("X")?;
         check_target(y, x.nrows())?;
         let (n, d) = (x.nrows(), x.ncols());
@@ -77,11 +77,11 @@ impl MlrValidParams {
         let b: Vec<f64> = y.iter().map(|v| v - ym).collect();
         let coef = lstsq(a.as_ref(), &b)?;
         let intercept = ym - coef.iter().zip(&xm).map(|(c, m)| c * m).sum::<f64>();
-        Ok(LinearRegression { coef, intercept })
+        Ok(MlrModel { coef, intercept })
     }
 }
 
-impl LinearRegression {
+impl MlrModel {
     pub fn n_features(&self) -> usize {
         self.coef.len()
     }
@@ -145,6 +145,6 @@ mod tests {
         fn is_send_sync<T: Send + Sync>() {}
         is_send_sync::<MlrParams>();
         is_send_sync::<MlrValidParams>();
-        is_send_sync::<LinearRegression>();
+        is_send_sync::<MlrModel>();
     }
 }

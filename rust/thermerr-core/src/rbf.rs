@@ -178,7 +178,7 @@ impl RbfParams {
 
 /// A fitted RBF network.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct RbfNetwork {
+pub struct RbfModel {
     pub centers: Matrix,
     pub spread: f64,
     pub weights: Vec<f64>,
@@ -223,7 +223,7 @@ fn rows_of(x: Samples<'_>, idx: &[usize]) -> Matrix {
 #[cfg(feature = "fit")]
 impl RbfValidParams {
     /// Trains on the rows of `x` to the targets `y`.
-    pub fn fit(&self, x: Samples<'_>, y: &[f64]) -> Result<RbfNetwork> {
+    pub fn fit(&self, x: Samples<'_>, y: &[f64]) -> Result<RbfModel> {
         x.require_finite("X")?;
         check_target(y, x.nrows())?;
         let n = x.nrows();
@@ -277,9 +277,9 @@ impl RbfValidParams {
         sol: Vec<f64>,
         selected: Vec<usize>,
         sse: Vec<f64>,
-    ) -> RbfNetwork {
+    ) -> RbfModel {
         let k = centers.nrows();
-        RbfNetwork {
+        RbfModel {
             centers,
             spread: self.spread,
             weights: sol[..k].to_vec(),
@@ -292,7 +292,7 @@ impl RbfValidParams {
     /// Forward selection with modified Gram–Schmidt: every remaining candidate column is kept
     /// orthogonal to the bias and to the neurons chosen so far, so the error reduction of each
     /// candidate is (wᵀy)²/(wᵀw) and one step costs O(n²).
-    fn fit_ols(&self, x: Samples<'_>, y: &[f64], b: f64) -> Result<RbfNetwork> {
+    fn fit_ols(&self, x: Samples<'_>, y: &[f64], b: f64) -> Result<RbfModel> {
         let n = x.nrows();
         let cap = self.max_neurons.unwrap_or(n).min(n);
         let mut cand: Vec<Vec<f64>> = (0..n)
@@ -365,7 +365,7 @@ impl RbfValidParams {
     }
 }
 
-impl RbfNetwork {
+impl RbfModel {
     pub fn n_features(&self) -> usize {
         self.centers.ncols()
     }
@@ -501,6 +501,6 @@ mod tests {
         fn is_send_sync<T: Send + Sync>() {}
         is_send_sync::<RbfParams>();
         is_send_sync::<RbfValidParams>();
-        is_send_sync::<RbfNetwork>();
+        is_send_sync::<RbfModel>();
     }
 }

@@ -5,7 +5,7 @@
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use thermerr_core::artifact::{read_envelope, write_envelope, Artifact, Header, Model};
-use thermerr_core::fcm::FuzzyCMeans;
+use thermerr_core::fcm::FcmModel;
 use thermerr_core::Error;
 
 use crate::fcm::PyFcmModel;
@@ -74,7 +74,7 @@ fn header_json(h: &Header) -> PyResult<String> {
 fn read_model(py: Python<'_>, text: &str) -> PyResult<(String, usize, String, Py<PyAny>)> {
     let (kind, n, header, model) = read_envelope(text).map_err(PyErrWrap)?;
     if kind == "fcm" {
-        let f: FuzzyCMeans =
+        let f: FcmModel =
             serde_json::from_value(model).map_err(|e| format_err(format!("fcm model: {e}")))?;
         f.validate().map_err(PyErrWrap)?;
         if f.n_features() != n {

@@ -2,14 +2,14 @@
 
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
-use thermerr_core::fcm::{hard_labels, FcmParams, FuzzyCMeans};
+use thermerr_core::fcm::{hard_labels, FcmModel, FcmParams};
 
 use crate::{matrix_to_py, samples, vec_to_py, PyErrWrap};
 
-/// A fitted fuzzy c-means partition (the Python `FuzzyCMeans` estimator holds one).
+/// A fitted fuzzy c-means partition (the Python `FcmModel` estimator holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "FcmModel")]
 pub struct PyFcmModel {
-    pub(crate) inner: FuzzyCMeans,
+    pub(crate) inner: FcmModel,
 }
 
 fn labels_to_py(py: Python<'_>, l: Vec<usize>) -> Bound<'_, PyArray1<i64>> {

@@ -2,7 +2,7 @@
 
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
-use thermerr_core::linear::{LinearRegression, MlrParams};
+use thermerr_core::linear::{MlrModel, MlrParams};
 
 use crate::params::Given;
 use crate::{samples, slice1, vec_to_py};
@@ -10,7 +10,7 @@ use crate::{samples, slice1, vec_to_py};
 /// A fitted linear model (the Python `MLR` estimator holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "MlrModel")]
 pub struct PyMlrModel {
-    pub(crate) inner: LinearRegression,
+    pub(crate) inner: MlrModel,
 }
 
 #[pymethods]

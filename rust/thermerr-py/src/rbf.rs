@@ -3,7 +3,7 @@
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use thermerr_core::kmeans::kmeans as core_kmeans;
-use thermerr_core::rbf::{RbfNetwork, RbfParams};
+use thermerr_core::rbf::{RbfModel, RbfParams};
 use thermerr_core::Matrix;
 
 use crate::params::{parse, Given};
@@ -12,7 +12,7 @@ use crate::{matrix_to_py, samples, slice1, vec_to_py};
 /// A fitted RBF network (the Python `RBFNetwork` holds one).
 #[pyclass(frozen, module = "thermerr_rs._core", name = "RbfModel")]
 pub struct PyRbfModel {
-    pub(crate) inner: RbfNetwork,
+    pub(crate) inner: RbfModel,
 }
 
 #[pymethods]

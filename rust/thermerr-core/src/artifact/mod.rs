@@ -20,9 +20,9 @@ use serde_json::{Map, Value};
 use crate::error::{Error, Result};
 use crate::grey::GreyBpModel;
 use crate::hybrid::HybridModel;
-use crate::linear::LinearRegression;
+use crate::linear::MlrModel;
 use crate::nn::{scale01, BpModel};
-use crate::rbf::RbfNetwork;
+use crate::rbf::RbfModel;
 use crate::svr::SvrModel;
 
 pub use stream::Predictor;
@@ -262,8 +262,8 @@ impl Preprocessing {
 /// The fitted model of one kind.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Model {
-    Mlr(LinearRegression),
-    Rbf(RbfNetwork),
+    Mlr(MlrModel),
+    Rbf(RbfModel),
     Svr(SvrModel),
     /// BP network on scaled temperatures (seed 002's baseline)
     Bp(BpModel),
