@@ -18,7 +18,7 @@ from .run import Run
 
 
 def _run_args(run: Run) -> tuple[str, F64, list[str], F64]:
-    return run.source, run.time_s, list(run.names), np.ascontiguousarray(run._data)
+    return run.source, run.time_s, list(run.names), run.matrix(list(run.names))
 
 
 @dataclass(frozen=True)
