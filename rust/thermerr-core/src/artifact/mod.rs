@@ -130,14 +130,14 @@ impl Preprocessing {
                 x_max: hi,
             }),
             "minmax_ago" => {
+                if y.is_empty() {
+                    return Err(Error::Shape("minmax_ago needs the target".into()));
+                }
                 let (y_min, y_max) = y
                     .iter()
                     .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
                         (a.min(v), b.max(v))
                     });
-                if y.is_empty() {
-                    return Err(Error::Shape("minmax_ago needs the target".into()));
-                }
                 Ok(Preprocessing::MinmaxAgo {
                     x_min: lo,
                     x_max: hi,

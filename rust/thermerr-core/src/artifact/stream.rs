@@ -1,5 +1,4 @@
-//! A loaded model file with its per-run state: what `thermerr-edge` runs sample by sample, and
-//! what the library runs over a whole series (`predict_series`), through the same code.
+//! A loaded model file with its per-run state: what `thermerr-edge` runs sample by sample.
 
 use super::{Artifact, Inputs, Model, Preprocessing};
 use crate::error::{Error, Result};
@@ -180,17 +179,5 @@ impl Predictor {
         let y = pre.output(y1, self.y1_prev);
         self.y1_prev = y1;
         Ok(y)
-    }
-
-    /// A whole run (row-major, `n_features` per row) from its first sample: closed loop, or one
-    /// step ahead from the measured errors. Starts a new run first.
-    pub fn predict_series(&mut self, x: &[f64], measured: Option<&[f64]>) -> Result<Vec<f64>> {
-        self.reset();
-        let m = self.n_features();
-        let out = crate::sequence::run_series(x, m, measured, |row, prev| {
-            self.predict_sample_measured(row, prev)
-        });
-        self.reset();
-        out
     }
 }

@@ -223,7 +223,10 @@ fn mutated_model_files_never_panic() {
             for x in [vec![20.0; d], vec![0.0; d], vec![1e6; d], vec![20.0; d + 1]] {
                 let _ = p.predict_sample(&x);
             }
-            let _ = p.predict_series(&vec![21.0; 3 * d], Some(&[0.0, 1.0, 2.0]));
+            p.reset();
+            for (k, e) in [0.0, 1.0, 2.0].into_iter().enumerate() {
+                let _ = p.predict_sample_measured(&vec![21.0 + k as f64; d], Some(e));
+            }
         }
     }
     assert!(n_files > 500, "only {n_files} mutated files");
