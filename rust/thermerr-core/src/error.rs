@@ -62,6 +62,10 @@ pub enum Error {
     /// A model file that is not what this version of the library writes.
     #[error("model file: {0}")]
     Format(String),
+
+    /// The call was interrupted (Ctrl-C) through [`crate::interrupt::request`].
+    #[error("interrupted")]
+    Interrupted,
 }
 
 fn format_parse(

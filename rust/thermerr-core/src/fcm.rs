@@ -257,6 +257,7 @@ fn gram_run(
     let mut n_iter = 0;
     while n_iter < max_iter {
         n_iter += 1;
+        crate::interrupt::check()?;
         for (wr, ur) in w.chunks_exact_mut(c).zip(u_prev.chunks_exact(c)) {
             weights(ur, wr, m);
         }
@@ -435,6 +436,7 @@ impl<'a> Fcm<'a> {
         let mut n_iter = 0;
         while n_iter < max_iter {
             n_iter += 1;
+            crate::interrupt::check()?;
             let last = n_iter == max_iter;
             let ctr = &centers;
             self.for_groups(

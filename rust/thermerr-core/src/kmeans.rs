@@ -108,6 +108,7 @@ pub fn kmeans(x: Samples<'_>, init: &Matrix, max_iter: usize) -> Result<KMeans> 
     let mut n_iter = 0;
     let mut strict = false;
     for it in 0..max_iter.max(1) {
+        crate::interrupt::check()?;
         n_iter = it + 1;
         assign(x, &centers, &mut labels);
         let mut sums = vec![0.0; k * d];

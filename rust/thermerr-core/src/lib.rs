@@ -14,6 +14,7 @@ pub mod error;
 pub mod fcm;
 pub mod grey;
 pub mod hybrid;
+pub mod interrupt;
 #[cfg(feature = "fit")]
 pub mod kmeans;
 #[cfg(feature = "fit")]

@@ -438,6 +438,7 @@ impl BpValidParams {
                 let mut vel = zeros_like(&net);
                 let mut hist = Vec::new();
                 for _ in 0..max_epochs {
+                    crate::interrupt::check()?;
                     let (mse, grad) = mse_grad(&net, x, y);
                     hist.push(mse);
                     if !mse.is_finite() {

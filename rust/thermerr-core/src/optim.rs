@@ -139,6 +139,7 @@ where
     let mut iter = 0;
     while iter < opts.max_iter {
         iter += 1;
+        crate::interrupt::check()?;
         // forward-difference Jacobian in θ, columns in parallel
         let cols: Vec<Result<Vec<f64>>> = (0..n)
             .into_par_iter()

@@ -317,6 +317,7 @@ impl RbfValidParams {
         let mut used = vec![false; n];
         let mut selected = Vec::new();
         while selected.len() < cap && sse > self.goal {
+            crate::interrupt::check()?;
             let mut best: Option<(f64, usize)> = None;
             for j in 0..n {
                 if used[j] {

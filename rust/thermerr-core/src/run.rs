@@ -53,6 +53,11 @@ pub struct Run {
     pub interpolated: usize,
 }
 
+/// Largest magnitude a cell of a run may have. Beyond it, squares and sums of squares lose all
+/// precision (and above ~1e154 overflow to infinity), so figures and fits would be meaningless;
+/// real runs stay many orders of magnitude below (epoch seconds are ~2e9).
+pub const MAX_ABS_VALUE: f64 = 1e12;
+
 impl Run {
     /// Reads a CSV file. Every refusal names the file, and the row/line and column where there is
     /// one.
@@ -181,6 +186,21 @@ impl Run {
                 keep_cols.push(col.clone());
             } else {
                 ignored.push(name.clone());
+            }
+        }
+        for (name, col) in std::iter::once(("time_s", time))
+            .chain(keep_names.iter().map(String::as_str).zip(keep_cols.iter()))
+        {
+            if let Some(i) = col.iter().position(|v| v.abs() > MAX_ABS_VALUE) {
+                return Err(at(
+                    i,
+                    name,
+                    format!(
+                        "{:e} is beyond ±{MAX_ABS_VALUE:e}: no temperature, error, input or time \
+                         in seconds is that large (is the unit right?)",
+                        col[i]
+                    ),
+                ));
             }
         }
         let mut time = time.clone();
@@ -383,6 +403,20 @@ mod tests {
     fn err(text: &[u8], nan: NanPolicy) -> String {
         let p = write(text);
         Run::read_csv(&p.0, nan).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn refuses_values_too_large_to_compute_with() {
+        let e = err(b"time_s,T_a,E_z\n0,20,0\n15,21,2e154\n", NanPolicy::Error);
+        assert!(
+            e.contains("row 2") && e.contains("E_z") && e.contains("2e154"),
+            "{e}"
+        );
+        let e = err(b"time_s,T_a,E_z\n0,20,0\n1e300,21,1\n", NanPolicy::Error);
+        assert!(e.contains("row 2") && e.contains("time_s"), "{e}");
+        // epoch seconds are fine
+        let p = write(b"time_s,T_a,E_z\n1790000000,20,0\n1790000015,21,1\n");
+        assert!(Run::read_csv(&p.0, NanPolicy::Error).is_ok());
     }
 
     #[test]

@@ -336,7 +336,7 @@ impl SvrValidParams {
         let mut p = Vec::with_capacity(2 * l);
         p.extend(y.iter().map(|v| self.epsilon - v));
         p.extend(y.iter().map(|v| self.epsilon + v));
-        let sol = solve(&mut q, p, self.c, self.tol, self.shrinking, self.max_iter);
+        let sol = solve(&mut q, p, self.c, self.tol, self.shrinking, self.max_iter)?;
         let mut support = Vec::new();
         let mut dual_coef = Vec::new();
         for i in 0..l {
@@ -696,7 +696,7 @@ fn solve(
     eps: f64,
     shrinking: bool,
     max_iter: Option<usize>,
-) -> Solution {
+) -> Result<Solution> {
     let l = p.len();
     let mut s = Solver {
         l,
@@ -731,6 +731,7 @@ fn solve(
         counter -= 1;
         if counter == 0 {
             counter = l.min(1000);
+            crate::interrupt::check()?;
             if shrinking {
                 s.do_shrinking();
                 first = None;
@@ -758,11 +759,11 @@ fn solve(
     for k in 0..l {
         alpha[s.active_set[k]] = s.alpha[k];
     }
-    Solution {
+    Ok(Solution {
         alpha,
         rho,
         n_iter: iter,
-    }
+    })
 }
 
 #[cfg(feature = "fit")]

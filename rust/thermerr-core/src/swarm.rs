@@ -568,6 +568,7 @@ where
     let mut history = Vec::with_capacity(params.iters);
 
     for _ in 0..params.iters {
+        crate::interrupt::check()?;
         for i in 0..n {
             for j in 0..d {
                 let r1 = rng.random::<f64>();

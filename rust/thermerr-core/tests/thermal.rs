@@ -139,6 +139,45 @@ fn two_nodes_match_fine_rk4_and_irregular_steps() {
 }
 
 #[test]
+fn a_jittering_logger_is_simulated_on_its_own_times() {
+    // 60-s samples with ±0.5 s of jitter on non-binary decimals: every step length differs. The
+    // simulation puts the times on a 1/32-s grid (a power of two near 1/1000 of the step), so a
+    // reading is taken at most 1/64 s off its time and the input switches at most 1/64 s off.
+    // The hot node moves at most (40 W + links) / 800 J/K ≈ 0.06 K/s, so each such shift costs at
+    // most ~1e-3 K, and the shifts do not accumulate (the times are rounded, not the steps).
+    let m = Machine::from_toml(TWO_NODES, "two.toml").unwrap();
+    let n = 400;
+    let t: Vec<f64> = (0..n)
+        .map(|k| k as f64 * 60.0 + 0.5 * (1.7 * k as f64).sin() + 0.0137)
+        .collect();
+    let rpm: Vec<f64> = (0..n)
+        .map(|k| [0.0, 3000.0, 6000.0, 4500.0][(k / 25) % 4])
+        .collect();
+    let mut hot = vec![0.0; n];
+    hot[0] = 20.0;
+    let r = run(vec![
+        ("time_s", t.clone()),
+        ("T_hot", hot),
+        ("U_rpm", rpm.clone()),
+        ("E_x", vec![0.0; n]),
+    ]);
+    let s = simulate(&m, &RunView::new(&r), &Init::FirstReading).unwrap();
+    let reference = rk4(&t, &rpm);
+    let worst = reference
+        .iter()
+        .enumerate()
+        .map(|(k, x)| {
+            (s.temps[2 * k] - x[0])
+                .abs()
+                .max((s.temps[2 * k + 1] - x[1]).abs())
+        })
+        .fold(0.0, f64::max);
+    assert!(worst < 2e-3, "largest deviation {worst} K");
+    // and the rounding is what makes the difference: the hot node rises by tens of K here
+    assert!(reference.iter().any(|x| x[0] > 30.0));
+}
+
+#[test]
 fn coarse_and_fine_sampling_agree_on_shared_instants() {
     let m = Machine::from_toml(TWO_NODES, "two.toml").unwrap();
     let mk = |step: usize| {
@@ -215,6 +254,25 @@ fn validation_names_the_entry() {
     assert!(e.contains("ref must be > 0"), "{e}");
     let e = err("name = \"x\"\nambient = 20.0\nnodes = [ { name = \"a\", capacity_j_per_k = 1.0, ambient_w_per_k = 1.0, sensr = \"T\" } ]\n");
     assert!(e.contains("sensr"), "{e}");
+    let e = err(&TWO_NODES.replace(
+        "between = [\"hot\", \"cold\"]",
+        "between = [\"hot\", \"cold\", \"hot\"]",
+    ));
+    assert!(e.contains("exactly two nodes, got 3"), "{e}");
+    let e = err(&format!(
+        "{TWO_NODES}[[drift]]\naxis = \"E_x\"\num_per_k = {{ hot = 2.0 }}\n"
+    ));
+    assert!(
+        e.contains("drift[1] `E_x`") && e.contains("one [[drift]] per axis"),
+        "{e}"
+    );
+    let e = err(&format!(
+        "{TWO_NODES}[[drift.columns]]\ncolumn = \"T_hot\"\num_per_k = nan\n"
+    ));
+    assert!(
+        e.contains("columns[0] `T_hot`") && e.contains("finite"),
+        "{e}"
+    );
     let e = err("name = \"x\"\nambient = 20.0\n[[nodes]\n");
     assert!(e.contains("line 3"), "{e}");
 }
@@ -233,4 +291,28 @@ fn missing_run_column_names_the_entry() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("U_rpm") && e.contains("sources[0]"), "{e}");
+}
+
+#[test]
+fn calibration_refuses_a_bound_factor_that_freezes_it() {
+    use thermerr_core::thermal::calibrate::{calibrate, CalibrationOptions};
+    let m = Machine::from_toml(TWO_NODES, "two.toml").unwrap();
+    let n = 50;
+    let r = run(vec![
+        ("time_s", (0..n).map(|k| k as f64 * 60.0).collect()),
+        ("T_hot", vec![20.0; n]),
+        ("U_rpm", vec![3000.0; n]),
+        ("E_x", vec![0.0; n]),
+    ]);
+    for f in [1.0, 0.5, f64::NAN] {
+        let opts = CalibrationOptions {
+            axis: "E_x".into(),
+            bound_factor: f,
+            ..CalibrationOptions::default()
+        };
+        let e = calibrate(&m, &RunView::new(&r), &opts, None)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bound_factor") && e.contains("> 1"), "{e}");
+    }
 }

@@ -85,6 +85,45 @@ impl Default for CalibrationOptions {
     }
 }
 
+impl CalibrationOptions {
+    /// Refuses options that would make the search meaningless (a bound factor of 1 or less
+    /// freezes every parameter at its nominal value).
+    pub fn check(&self) -> Result<()> {
+        if !(self.bound_factor.is_finite() && self.bound_factor > 1.0) {
+            return Err(Error::param(
+                "bound_factor",
+                format!(
+                    "must be > 1 (parameters range over nominal / f .. nominal · f), got {}",
+                    self.bound_factor
+                ),
+            ));
+        }
+        if !(self.exponent_span.is_finite() && self.exponent_span >= 0.0) {
+            return Err(Error::param(
+                "exponent_span",
+                format!("must be >= 0, got {}", self.exponent_span),
+            ));
+        }
+        if !(self.prior_log_sigma.is_finite() && self.prior_log_sigma > 0.0) {
+            return Err(Error::param(
+                "prior_log_sigma",
+                format!("must be > 0, got {}", self.prior_log_sigma),
+            ));
+        }
+        if self.max_iter == 0 {
+            return Err(Error::param("max_iter", "must be at least 1"));
+        }
+        for (name, v) in [("sigma_t", self.sigma_t), ("sigma_e", self.sigma_e)] {
+            if let Some(v) = v {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(Error::param(name, format!("must be > 0, got {v}")));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 /// A calibrated machine and how well it fits.
 #[derive(Clone, Debug)]
 pub struct Calibration {
@@ -125,7 +164,7 @@ pub fn noise_level(y: &[f64]) -> f64 {
 /// The default free parameters of a machine (all thermal parameters, initial offsets of the
 /// sensed nodes).
 pub fn default_params(m: &Machine, opts: &CalibrationOptions) -> Vec<FreeParam> {
-    let f = opts.bound_factor.max(1.0 + 1e-6);
+    let f = opts.bound_factor;
     let pos = |param: Param, v: f64| FreeParam {
         param,
         log: true,
@@ -370,6 +409,7 @@ pub fn calibrate(
     opts: &CalibrationOptions,
     free: Option<Vec<FreeParam>>,
 ) -> Result<Calibration> {
+    opts.check()?;
     let tg = targets(m, run, &opts.axis)?;
     let rows = opts.fit_rows.unwrap_or(run.len()).min(run.len());
     if rows < 10 {
@@ -429,12 +469,19 @@ pub fn calibrate(
     };
     let (mm, init) = apply(m, &free, &x);
     let (fitted, _, r) = evaluate(&mm, &init, run, &tg, rows, sigma_t, sigma_e, true)?;
+    let ssr: f64 = r.iter().map(|v| v * v).sum();
+    if !ssr.is_finite() {
+        return Err(Error::Numerical(format!(
+            "{}: the calibrated model's residual is not finite (values too large for the network?)",
+            run.source
+        )));
+    }
     Ok(Calibration {
         machine: fitted,
         init,
         sigma_t,
         sigma_e,
-        ssr: r.iter().map(|v| v * v).sum(),
+        ssr,
         n_data: r.len(),
         n_params: free
             .iter()

@@ -58,6 +58,7 @@ pub struct NodeSpec {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LinkSpec {
+    #[serde(deserialize_with = "two_names")]
     pub between: [String; 2],
     pub w_per_k: f64,
 }
@@ -122,6 +123,17 @@ pub struct Machine {
     pub sources: Vec<SourceSpec>,
     #[serde(default)]
     pub drift: Vec<DriftSpec>,
+}
+
+/// `between` names exactly two nodes (a fixed-size array would silently drop a third).
+fn two_names<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<[String; 2], D::Error> {
+    let v = Vec::<String>::deserialize(d)?;
+    <[String; 2]>::try_from(v).map_err(|v| {
+        serde::de::Error::custom(format!(
+            "`between` names exactly two nodes, got {}: {v:?}",
+            v.len()
+        ))
+    })
 }
 
 fn bad(file: &str, entry: impl Into<String>, reason: impl Into<String>) -> Error {
@@ -275,6 +287,30 @@ impl Machine {
             if !d.axis.starts_with("E_") {
                 return Err(bad(file, at, "axis must name an E_* column"));
             }
+            if let Some(j) = self.drift[..k].iter().position(|o| o.axis == d.axis) {
+                return Err(bad(
+                    file,
+                    at,
+                    format!("drift[{j}] already maps this axis: one [[drift]] per axis"),
+                ));
+            }
+            for (j, c) in d.columns.iter().enumerate() {
+                if !c.um_per_k.is_finite() {
+                    return Err(bad(
+                        file,
+                        &at,
+                        format!(
+                            "columns[{j}] `{}`: um_per_k must be finite, got {}",
+                            c.column, c.um_per_k
+                        ),
+                    ));
+                }
+            }
+            if let Some(a) = d.ambient_um_per_k {
+                if !a.is_finite() {
+                    return Err(bad(file, &at, "ambient_um_per_k must be finite"));
+                }
+            }
             for (name, v) in d.um_per_k.iter().chain(&d.quadratic_um_per_k2) {
                 node(name, &at)?;
                 if !v.is_finite() {
@@ -291,7 +327,11 @@ impl Machine {
                 }
             }
             for t in &d.inputs {
-                if !(t.reference > 0.0 && t.um.is_finite() && t.exponent.is_finite()) {
+                if !(t.reference.is_finite()
+                    && t.reference > 0.0
+                    && t.um.is_finite()
+                    && t.exponent.is_finite())
+                {
                     return Err(bad(
                         file,
                         &at,

@@ -205,6 +205,43 @@ fn ambient_series<'a>(mach: &Machine, run: &RunView<'a>) -> Result<std::borrow::
     })
 }
 
+/// Distinct step lengths whose transition matrices are kept at once.
+const MAX_STEP_LENGTHS: usize = 1024;
+
+/// The time axis on a grid of `q` seconds, a power of two near 1/1000 of the mean step.
+///
+/// Each distinct step length needs its own matrix exponential; a logger that jitters (±0.5 s on
+/// 60-s samples) would make every step distinct. On the grid, a run on whole (or binary-fraction)
+/// seconds keeps its exact steps, and a jittered one has a few dozen distinct step lengths; each
+/// time moves by at most q/2 (30 ms at 60-s sampling) and the moves do not accumulate, because
+/// the times are rounded, not the steps.
+struct Ticks {
+    q: f64,
+}
+
+impl Ticks {
+    fn new(t: &[f64]) -> Self {
+        let n = t.len();
+        let mean = if n > 1 {
+            (t[n - 1] - t[0]) / (n - 1) as f64
+        } else {
+            1.0
+        };
+        let e = if mean.is_finite() && mean > 0.0 {
+            (mean / 1024.0).log2().floor().clamp(-40.0, 40.0)
+        } else {
+            0.0
+        };
+        Ticks {
+            q: 2f64.powi(e as i32),
+        }
+    }
+
+    fn at(&self, t: f64) -> i64 {
+        (t / self.q).round() as i64
+    }
+}
+
 /// Simulates the machine over the run's time axis and inputs.
 pub fn simulate(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<Simulation> {
     let temps = simulate_nodes(mach, run, init)?;
@@ -252,7 +289,8 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         x.push(v);
     }
     let mut out = vec![0.0; n_t * nn];
-    let mut cache: Vec<(u64, DMatrix<f64>, DMatrix<f64>)> = Vec::new();
+    let ticks = Ticks::new(t);
+    let mut cache: HashMap<i64, (DMatrix<f64>, DMatrix<f64>)> = HashMap::new();
     let mut f = vec![0.0; nd];
     let mut xn = vec![0.0; nd];
     for k in 0..n_t {
@@ -268,7 +306,10 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         if k + 1 == n_t {
             break;
         }
-        let h = t[k + 1] - t[k];
+        if k % 1024 == 0 {
+            crate::interrupt::check()?;
+        }
+        let steps = ticks.at(t[k + 1]) - ticks.at(t[k]);
         for (fp, g) in f.iter_mut().zip(&net.g_amb) {
             *fp = g * amb[k];
         }
@@ -284,26 +325,22 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         for (fp, c) in f.iter_mut().zip(&net.cap) {
             *fp /= c;
         }
-        let key = h.to_bits();
-        let idx = match cache.iter().position(|(kk, _, _)| *kk == key) {
-            Some(i) => i,
-            None => {
-                let mut big = DMatrix::<f64>::zeros(2 * nd, 2 * nd);
-                big.view_mut((0, 0), (nd, nd)).copy_from(&net.m);
-                for p in 0..nd {
-                    big[(p, nd + p)] = 1.0;
-                }
-                let e = expm(&(big * h));
-                let phi = e.view((0, 0), (nd, nd)).into_owned();
-                let gam = e.view((0, nd), (nd, nd)).into_owned();
-                if cache.len() >= 64 {
-                    cache.remove(0);
-                }
-                cache.push((key, phi, gam));
-                cache.len() - 1
+        if !cache.contains_key(&steps) {
+            let h = steps as f64 * ticks.q;
+            let mut big = DMatrix::<f64>::zeros(2 * nd, 2 * nd);
+            big.view_mut((0, 0), (nd, nd)).copy_from(&net.m);
+            for p in 0..nd {
+                big[(p, nd + p)] = 1.0;
             }
-        };
-        let (_, phi, gam) = &cache[idx];
+            let e = expm(&(big * h));
+            let phi = e.view((0, 0), (nd, nd)).into_owned();
+            let gam = e.view((0, nd), (nd, nd)).into_owned();
+            if cache.len() >= MAX_STEP_LENGTHS {
+                cache.clear();
+            }
+            cache.insert(steps, (phi, gam));
+        }
+        let (phi, gam) = &cache[&steps];
         for p in 0..nd {
             let mut acc = 0.0;
             for q in 0..nd {

@@ -104,17 +104,59 @@ pub(super) fn speed_growth(m: &Machine, axis: usize, run: &RunView<'_>) -> Vec<S
     out
 }
 
-/// One per unused `T_*` column × simulated node: the column as a boundary node linked to it.
-pub(super) fn unmodeled_source(m: &Machine, run: &RunView<'_>) -> Vec<Spec> {
+/// The `T_*` columns of the run that the machine does not use.
+pub(super) fn free_columns(m: &Machine, run: &RunView<'_>) -> Vec<String> {
     let used: Vec<String> = m.columns().into_iter().map(|(c, _)| c).collect();
-    let mut free_cols: Vec<String> = run
+    let mut free: Vec<String> = run
         .cols_with_prefix("T_")
         .into_iter()
         .filter(|c| !used.contains(c))
         .collect();
-    free_cols.sort();
+    free.sort();
+    free
+}
+
+/// `free` ranked by how strongly each column's rise since the start follows the baseline's
+/// training residual of the error axis (|Pearson r| over the fitted rows), strongest first; ties
+/// keep the name order. An unmodelled source shows as a residual that tracks its temperature.
+pub(super) fn rank_by_residual(
+    free: Vec<String>,
+    run: &RunView<'_>,
+    residual: &[f64],
+) -> Result<Vec<String>> {
+    let rows = residual.len();
+    let mut scored = Vec::with_capacity(free.len());
+    for col in free {
+        let c = run.col(&col)?;
+        let rise: Vec<f64> = c[..rows].iter().map(|v| v - c[0]).collect();
+        scored.push((pearson(&rise, residual).abs(), col));
+    }
+    scored.sort_by(|a, b| b.0.total_cmp(&a.0));
+    Ok(scored.into_iter().map(|(_, c)| c).collect())
+}
+
+/// Pearson correlation; 0 when either series is constant.
+fn pearson(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len()).max(1) as f64;
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        let (dx, dy) = (x - ma, y - mb);
+        sab += dx * dy;
+        saa += dx * dx;
+        sbb += dy * dy;
+    }
+    if saa <= 0.0 || sbb <= 0.0 || !(saa * sbb).is_finite() {
+        0.0
+    } else {
+        sab / (saa * sbb).sqrt()
+    }
+}
+
+/// One per given `T_*` column × simulated node: the column as a boundary node linked to it.
+pub(super) fn unmodeled_source(m: &Machine, free_cols: &[String]) -> Vec<Spec> {
     let mut out = Vec::new();
-    for col in &free_cols {
+    for col in free_cols {
         for node in m.nodes.iter().filter(|n| n.boundary.is_none()) {
             let mut src = m.clone();
             let name = format!("source_{}", col.trim_start_matches("T_"));

@@ -53,12 +53,18 @@ impl Cause {
 
     /// The extensions of `m` that model this cause for drift entry `axis` on `run` (none when
     /// the machine or the run has nothing for it, e.g. no unused `T_*` column).
-    pub fn specs(self, m: &Machine, axis: usize, run: &RunView<'_>) -> Vec<Spec> {
+    pub fn specs(
+        self,
+        m: &Machine,
+        axis: usize,
+        run: &RunView<'_>,
+        source_columns: &[String],
+    ) -> Vec<Spec> {
         match self {
             Cause::ThermalLag => vec![candidates::thermal_lag(m, axis)],
             Cause::AmbientCoupling => candidates::ambient_coupling(m, axis).into_iter().collect(),
             Cause::SpeedGrowth => candidates::speed_growth(m, axis, run),
-            Cause::UnmodeledSource => candidates::unmodeled_source(m, run),
+            Cause::UnmodeledSource => candidates::unmodeled_source(m, source_columns),
             Cause::NonlinearExpansion => candidates::nonlinear_expansion(m, axis),
             Cause::SensorDrift => candidates::sensor_drift(m),
         }

@@ -15,13 +15,22 @@ pub mod verdict;
 
 use std::collections::BTreeMap;
 
+/// Unused `T_*` columns tried as an unmodelled source: the ones whose rise best follows the
+/// baseline's residual. Each is tried on every simulated node, and each try is a calibration, so
+/// a run with dozens of spare sensors would otherwise cost minutes.
+pub const MAX_SOURCE_COLUMNS: usize = 4;
+/// Candidates fitted in all; unmodelled-source pairs of the lower-ranked columns go first.
+pub const MAX_CANDIDATES: usize = 48;
+/// Held-out rows below which no verdict is given.
+pub const MIN_HOLDOUT_ROWS: usize = 10;
+
 use rayon::prelude::*;
 use serde::{Serialize, Serializer};
 
 pub use cause::Cause;
 pub use verdict::Verdict;
 
-use super::calibrate::{calibrate, Calibration, CalibrationOptions};
+use super::calibrate::{calibrate, evaluate, targets, Calibration, CalibrationOptions};
 use super::machine::Machine;
 use super::sim::RunView;
 use crate::error::{Error, Result};
@@ -123,6 +132,8 @@ pub struct Diagnosis {
     pub candidates: Vec<Candidate>,
     /// Index in `candidates` of the named cause, if any.
     pub chosen: Option<usize>,
+    /// Unused `T_*` columns not tried as a source (beyond [`MAX_SOURCE_COLUMNS`] or the cap).
+    pub untried_columns: Vec<String>,
     /// The training run's source.
     pub run: String,
     /// The held-out description and its time axis and measured error.
@@ -146,6 +157,7 @@ pub struct Report<'a> {
     pub run: &'a str,
     pub machine: &'a str,
     pub candidates: &'a [Candidate],
+    pub untried_columns: &'a [String],
 }
 
 impl Diagnosis {
@@ -181,6 +193,7 @@ impl Diagnosis {
             run: &self.run,
             machine,
             candidates: &self.candidates,
+            untried_columns: &self.untried_columns,
         }
     }
 }
@@ -217,6 +230,16 @@ pub fn diagnose(
         }
         ((n as f64) * (1.0 - opts.holdout_fraction)).round() as usize
     };
+    let held_rows = match hold {
+        Some(h) => h.len(),
+        None => n - split,
+    };
+    if held_rows < MIN_HOLDOUT_ROWS {
+        return Err(Error::Shape(format!(
+            "{}: {held_rows} held-out rows are too few for a verdict (at least {MIN_HOLDOUT_ROWS})",
+            hold.map_or(train.source.as_str(), |h| h.source.as_str())
+        )));
+    }
     let held = HeldOut {
         run: hold.unwrap_or(train),
         from: if hold.is_some() { 0 } else { split },
@@ -240,13 +263,54 @@ pub fn diagnose(
     };
     // extensions are built on the nominal machine, so that bounds and priors are the baseline's
     // (centred on the user's estimate); the search starts from the calibrated values
-    let specs: Vec<_> = Cause::ALL
+    let free = candidates::free_columns(m, train);
+    let ranked = if free.len() > MAX_SOURCE_COLUMNS {
+        let tg = targets(&baseline.machine, train, &axis)?;
+        let (_, sim, _) = evaluate(
+            &baseline.machine,
+            &baseline.init,
+            train,
+            &tg,
+            split,
+            baseline.sigma_t,
+            baseline.sigma_e,
+            false,
+        )?;
+        let residual: Vec<f64> = sim.drift[axis_index].1[..split]
+            .iter()
+            .zip(&tg.measured_e[..split])
+            .map(|(p, y)| y - p)
+            .collect();
+        candidates::rank_by_residual(free, train, &residual)?
+    } else {
+        free
+    };
+    let n_tried = ranked.len().min(MAX_SOURCE_COLUMNS);
+    let mut untried_columns = ranked[n_tried..].to_vec();
+    let mut specs: Vec<_> = Cause::ALL
         .into_iter()
-        .flat_map(|c| c.specs(m, axis_index, train))
+        .flat_map(|c| c.specs(m, axis_index, train, &ranked[..n_tried]))
         .collect();
+    if specs.len() > MAX_CANDIDATES {
+        // drop the unmodelled-source pairs of the lowest-ranked columns until the cap holds
+        for col in ranked[..n_tried].iter().rev() {
+            if specs.len() <= MAX_CANDIDATES {
+                break;
+            }
+            specs.retain(|s| {
+                !(s.cause == Cause::UnmodeledSource && s.column.as_deref() == Some(col.as_str()))
+            });
+            untried_columns.insert(0, col.clone());
+        }
+        specs.truncate(MAX_CANDIDATES);
+    }
+    crate::interrupt::check()?;
     let mut cands = specs
         .into_par_iter()
-        .map(|spec| candidates::fit(spec, &base, train, &held))
+        .map(|spec| {
+            crate::interrupt::check()?;
+            candidates::fit(spec, &base, train, &held)
+        })
         .collect::<Result<Vec<_>>>()?;
     cands.sort_by(|a, b| b.score.total_cmp(&a.score));
     let noise = baseline.sigma_e;
@@ -283,6 +347,7 @@ pub fn diagnose(
         baseline_holdout: base_hold,
         candidates: cands,
         chosen,
+        untried_columns,
         run: train.source.clone(),
         holdout_label,
         holdout_time,
