@@ -4,7 +4,7 @@
 //! a user would catch (`ValueError`, `KeyError`, ...); the binding imports each once, on first
 //! use, and keeps it.
 
-use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyRuntimeError};
+use pyo3::exceptions::{PyFileNotFoundError, PyKeyboardInterrupt, PyOSError, PyRuntimeError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::PyType;
@@ -69,6 +69,7 @@ impl From<PyErrWrap> for PyErr {
             Error::Numerical(_) => NUMERICAL.err(msg),
             Error::Convergence(_) => CONVERGENCE.err(msg),
             Error::Format(_) => MODEL_FORMAT.err(msg),
+            Error::Interrupted => PyKeyboardInterrupt::new_err(msg),
         }
     }
 }

@@ -55,7 +55,7 @@ impl PyFcmModel {
         x: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let xs = samples(&x)?;
-        let u = crate::detach(py, || self.inner.predict_membership(xs))?;
+        let u = crate::detach_short(py, || self.inner.predict_membership(xs))?;
         matrix_to_py(py, u)
     }
 
@@ -66,7 +66,7 @@ impl PyFcmModel {
         x: PyReadonlyArray2<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray1<i64>>> {
         let xs = samples(&x)?;
-        let l = crate::detach(py, || self.inner.predict(xs))?;
+        let l = crate::detach_short(py, || self.inner.predict(xs))?;
         Ok(labels_to_py(py, l))
     }
 

@@ -22,7 +22,54 @@ pub use error::{PyErrWrap, PyRes};
 
 /// Runs a core call with the GIL released and turns its error into the matching exception: the
 /// one way every binding calls into the core (polars' `enter_polars`).
+///
+/// The call runs on a scoped worker thread while this (the caller's) thread polls Python's
+/// signal handlers every 50 ms. On Ctrl-C the handler's `KeyboardInterrupt` is kept, the core's
+/// interrupt flag is raised, every long loop of the core returns at its next check, and the
+/// `KeyboardInterrupt` is raised here — within a second, and with nothing half-done left
+/// behind (the core returns before writing anything). Only the main thread sees signals, as in
+/// Python itself.
 pub(crate) fn detach<T: Send>(
+    py: Python<'_>,
+    f: impl FnOnce() -> thermerr_core::Result<T> + Send,
+) -> PyResult<T> {
+    let (joined, signal) = py.detach(|| {
+        std::thread::scope(|scope| {
+            let caller = std::thread::current();
+            let worker = scope.spawn(move || {
+                let r = f();
+                caller.unpark();
+                r
+            });
+            let mut signal: Option<PyErr> = None;
+            while !worker.is_finished() {
+                std::thread::park_timeout(std::time::Duration::from_millis(50));
+                if signal.is_none() && !worker.is_finished() {
+                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                        thermerr_core::interrupt::request();
+                        signal = Some(e);
+                    }
+                }
+            }
+            (worker.join(), signal)
+        })
+    });
+    if signal.is_some() {
+        thermerr_core::interrupt::clear();
+    }
+    let result = match joined {
+        Ok(r) => r,
+        Err(panic) => std::panic::resume_unwind(panic),
+    };
+    if let Some(e) = signal {
+        return Err(e);
+    }
+    result.map_err(|e| PyErrWrap(e).into())
+}
+
+/// [`detach`] without the watch for Ctrl-C, for calls too short to need one (a model's predict
+/// over a batch): no thread is started.
+pub(crate) fn detach_short<T: Send>(
     py: Python<'_>,
     f: impl FnOnce() -> thermerr_core::Result<T> + Send,
 ) -> PyResult<T> {
@@ -36,7 +83,7 @@ pub(crate) fn predict_rows<'py>(
     predict: impl FnOnce(Samples<'_>) -> thermerr_core::Result<Vec<f64>> + Send,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let xs = samples(x)?;
-    Ok(vec_to_py(py, detach(py, || predict(xs))?))
+    Ok(vec_to_py(py, detach_short(py, || predict(xs))?))
 }
 
 /// Borrows a C-contiguous float64 2-D array as row-major samples.
@@ -80,7 +127,7 @@ pub(crate) fn predict_series<'py>(
         Some(a) => Some(slice1(a)?),
         None => None,
     };
-    let out = detach(py, || f(xs.as_slice(), ys))?;
+    let out = detach_short(py, || f(xs.as_slice(), ys))?;
     Ok(vec_to_py(py, out))
 }
 

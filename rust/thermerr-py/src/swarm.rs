@@ -135,12 +135,10 @@ fn swarm_minimize(
         // the built-ins are cheap: evaluated serially (handing 20 of them to rayon per
         // generation costs more than it saves), without the GIL
         let batch = |p: &[Vec<f64>]| Ok(p.iter().map(|x| obj(x)).collect());
-        let r = py
-            .detach(|| match &m {
-                Method::Cso(p) => cso_minimize_batch(batch, &b, p),
-                Method::Pso(p) => pso_minimize_batch(batch, &b, p),
-            })
-            .map_err(PyErrWrap)?;
+        let r = crate::detach(py, || match &m {
+            Method::Cso(p) => cso_minimize_batch(batch, &b, p),
+            Method::Pso(p) => pso_minimize_batch(batch, &b, p),
+        })?;
         return Ok(out(r));
     }
     if !f.is_callable() {
@@ -274,18 +272,21 @@ fn tune_svr(
         search,
     };
     let (xs, ys) = (samples(&x)?, slice1(&y)?);
-    let r = py
-        .detach(|| {
-            tune::tune_svr(xs, ys, &folds, &tp, |gen, best| {
-                if let Some(cb) = &progress {
-                    Python::attach(|py| {
-                        // a failing progress callback must not stop the search
-                        let _ = cb.call1(py, (gen, best));
-                    });
-                }
-            })
+    let r = crate::detach(py, || {
+        tune::tune_svr(xs, ys, &folds, &tp, |gen, best| {
+            if let Some(cb) = &progress {
+                Python::attach(|py| {
+                    // a failing progress callback must not stop the search, but an
+                    // interrupt raised in it (or while it ran) stops it like Ctrl-C
+                    if let Err(e) = cb.call1(py, (gen, best)) {
+                        if e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
+                            thermerr_core::interrupt::request();
+                        }
+                    }
+                });
+            }
         })
-        .map_err(PyErrWrap)?;
+    })?;
     Ok((
         r.c,
         r.gamma,

@@ -122,23 +122,21 @@ impl PyMachine {
         fit_initial: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
         let run = core_run(source, &time, names, &data)?;
-        let sim = py
-            .detach(|| {
-                let view = RunView::new(&run);
-                self.inner
-                    .check_columns(&self.file, &run.source, |c| view.has(c))?;
-                let init = if fit_initial > 0 {
-                    Init::Offsets(thermerr_core::thermal::calibrate::fit_initial_offsets(
-                        &self.inner,
-                        &view,
-                        fit_initial,
-                    )?)
-                } else {
-                    Init::FirstReading
-                };
-                simulate(&self.inner, &view, &init)
-            })
-            .map_err(PyErrWrap)?;
+        let sim = crate::detach(py, || {
+            let view = RunView::new(&run);
+            self.inner
+                .check_columns(&self.file, &run.source, |c| view.has(c))?;
+            let init = if fit_initial > 0 {
+                Init::Offsets(thermerr_core::thermal::calibrate::fit_initial_offsets(
+                    &self.inner,
+                    &view,
+                    fit_initial,
+                )?)
+            } else {
+                Init::FirstReading
+            };
+            simulate(&self.inner, &view, &init)
+        })?;
         let d = PyDict::new(py);
         let nn = sim.node_names.len();
         let nodes = numpy::PyArray1::from_vec(py, sim.temps.clone());
@@ -181,14 +179,12 @@ impl PyMachine {
             max_iter,
             ..CalibrationOptions::default()
         };
-        let cal = py
-            .detach(|| {
-                let view = RunView::new(&run);
-                self.inner
-                    .check_columns(&self.file, &run.source, |c| view.has(c))?;
-                calibrate(&self.inner, &view, &opts, None)
-            })
-            .map_err(PyErrWrap)?;
+        let cal = crate::detach(py, || {
+            let view = RunView::new(&run);
+            self.inner
+                .check_columns(&self.file, &run.source, |c| view.has(c))?;
+            calibrate(&self.inner, &view, &opts, None)
+        })?;
         let d = PyDict::new(py);
         d.set_item("sigma_t", cal.sigma_t)?;
         d.set_item("sigma_e", cal.sigma_e)?;
@@ -242,19 +238,17 @@ impl PyMachine {
             noise_ratio,
             ..DiagnoseOptions::default()
         };
-        let diag = py
-            .detach(|| {
-                let view = RunView::new(&run);
+        let diag = crate::detach(py, || {
+            let view = RunView::new(&run);
+            self.inner
+                .check_columns(&self.file, &run.source, |c| view.has(c))?;
+            let hview = hold.as_ref().map(RunView::new);
+            if let Some(h) = &hview {
                 self.inner
-                    .check_columns(&self.file, &run.source, |c| view.has(c))?;
-                let hview = hold.as_ref().map(RunView::new);
-                if let Some(h) = &hview {
-                    self.inner
-                        .check_columns(&self.file, &h.source, |c| h.has(c))?;
-                }
-                diagnose(&self.inner, &view, hview.as_ref(), &opts)
-            })
-            .map_err(PyErrWrap)?;
+                    .check_columns(&self.file, &h.source, |c| h.has(c))?;
+            }
+            diagnose(&self.inner, &view, hview.as_ref(), &opts)
+        })?;
         let out = PyDict::new(py);
         let report = serde_json::to_string(&diag.report(&self.file))
             .map_err(|e| PyErrWrap(thermerr_core::Error::Format(e.to_string())))?;
