@@ -129,6 +129,7 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         (the error is itself relative to the run's start), which carries over between runs that
         start at different shop temperatures; ``"absolute"`` uses the readings as they are.
         """
+        run.check_fit_columns(target, list(features))
         return self._fit_checked(run.input_matrix(features, inputs), run[target], names=list(features),
                                  target=target, inputs=inputs)
 

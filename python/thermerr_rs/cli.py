@@ -8,20 +8,25 @@
     thermerr diagnose RUN.csv --machine M.toml --out DIR [--holdout TEST.csv]
     thermerr stiffness MODEL.json RUN.csv [--at SECONDS] [--eta 0.5]
 
-Bad input ends with a one-line message on stderr and exit status 2.
+Exit status: 0 done; 1 the computation failed on valid input (a numerical failure, no
+convergence) or an output could not be written (a full disk); 2 a usage error or bad input (a
+one-line message on stderr names what and where); 130 interrupted (Ctrl-C); 141 the reader of
+standard output went away (``thermerr ... | head``), silently.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
 import sys
 from collections.abc import Sequence
 from typing import Any
 
 from . import __version__
 from .base import Estimator, load_model
-from .errors import ThermerrError
+from .errors import ConvergenceError, NumericalError, ThermerrError
 from .linear import MLR
 from .metrics import Scores, scores
 from .pipeline import MinMaxScaled
@@ -35,6 +40,56 @@ def _progress_enabled(args: argparse.Namespace) -> bool:
 def _say(args: argparse.Namespace, *text: Any) -> None:
     if not args.quiet:
         print(*text)
+
+
+def _stage(args: argparse.Namespace, text: str) -> None:
+    """A line on stderr saying what a long step is doing (also on a pipe or in a log)."""
+    if not args.quiet:
+        print(f"thermerr: {text}", file=sys.stderr, flush=True)
+
+
+def _finite(obj: Any) -> Any:
+    """``obj`` with every non-finite float replaced by None (JSON has no NaN or Infinity)."""
+    if isinstance(obj, float):
+        return obj if math.isfinite(obj) else None
+    if isinstance(obj, dict):
+        return {k: _finite(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_finite(v) for v in obj]
+    return obj
+
+
+def _print_json(obj: Any) -> None:
+    print(json.dumps(_finite(obj), indent=1, allow_nan=False))
+
+
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {v}")
+    return v
+
+
+def _nonneg_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a whole number") from None
+    if v < 0:
+        raise argparse.ArgumentTypeError(f"must be 0 or more, got {v}")
+    return v
+
+
+def _check_out(out: str, *inputs: str | None) -> None:
+    """Refuse an output path that is one of the command's inputs (it would overwrite it)."""
+    target = os.path.realpath(out)
+    for given in inputs:
+        if given and os.path.realpath(given) == target:
+            raise ThermerrError(f"--out {out} is the input file {given}: it would be overwritten; "
+                                "choose another path")
 
 
 def _sensors(args: argparse.Namespace, run: Run) -> list[str]:
@@ -73,6 +128,7 @@ def _make_svr(args: argparse.Namespace, run: Run, sensors: list[str]) -> Estimat
 
 
 def _make_model(args: argparse.Namespace, n_train: int) -> Estimator:
+    hidden = {} if args.hidden is None else {"hidden": args.hidden}  # else each family's default
     if args.model == "mlr":
         return MLR()
     if args.model in ("greybp", "gm1n", "bp"):
@@ -81,13 +137,13 @@ def _make_model(args: argparse.Namespace, n_train: int) -> Estimator:
         if args.model == "gm1n":
             return GM1N(window=args.window)
         if args.model == "bp":
-            return BPNetwork(hidden=args.hidden or 7, trainer=args.trainer, seed=args.seed)
-        return GreyBP(windows=tuple(args.windows), hidden=args.hidden or 7, trainer=args.trainer, seed=args.seed)
+            return BPNetwork(**hidden, trainer=args.trainer, seed=args.seed)
+        return GreyBP(windows=tuple(args.windows), **hidden, trainer=args.trainer, seed=args.seed)
     if args.model == "hybrid":
         from .hybrid import HybridFilterNet
 
         limit = args.limit if args.limit is not None else max(50.0, 1.5 * args._max_abs_error)
-        return HybridFilterNet(variant=args.variant, hidden=args.hidden or 30, trainer=args.trainer, seed=args.seed,
+        return HybridFilterNet(variant=args.variant, **hidden, trainer=args.trainer, seed=args.seed,
                                limit=limit)
     from .rbf import RBFNetwork
 
@@ -110,9 +166,11 @@ def _print_scores(args: argparse.Namespace, title: str, s: Scores) -> None:
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
+    _check_out(args.out, args.run, args.test)
     run = read_run(args.run, nan=args.nan)
     run[args.axis]
     sensors = _sensors(args, run)
+    run.check_fit_columns(args.axis, sensors)
     args._max_abs_error = float(abs(run[args.axis]).max())
     if args.model == "svr":
         model = _make_svr(args, run, sensors)
@@ -132,7 +190,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     path = model.save(args.out)
     report["out"] = str(path)
     if args.json:
-        print(json.dumps(report, indent=1))
+        _print_json(report)
     else:
         _say(args, f"model written to {path}")
     return 0
@@ -146,7 +204,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         raise ThermerrError(f"{args.model} does not record its target axis: pass --axis")
     s = scores(run[target], model.predict_run(run))
     if args.json:
-        print(json.dumps({"axis": target, **s.as_dict()}, indent=1))
+        _print_json({"axis": target, **s.as_dict()})
     else:
         wrapped = getattr(model, "estimator", None)  # the model inside a preprocessing wrapper
         inner = wrapped if isinstance(wrapped, Estimator) else model
@@ -162,7 +220,10 @@ def cmd_select(args: argparse.Namespace) -> int:
     run = read_run(args.run, nan=args.nan)
     axes = [a.strip() for a in args.axis.split(",") if a.strip()]
     sel = select_sensors(run, axes[0] if len(axes) == 1 else axes, n_clusters=args.n_clusters, seed=args.seed)
-    print(sel)
+    if args.json:
+        _print_json(sel.to_dict())
+    else:
+        print(sel)
     return 0
 
 
@@ -170,6 +231,7 @@ def cmd_predict(args: argparse.Namespace) -> int:
     from ._io import write_atomic
     from .thermal import Machine
 
+    _check_out(args.out, args.run, args.machine)
     machine = Machine.load(args.machine)
     run = read_run(args.run, nan=args.nan)
     sim = machine.simulate(run, fit_initial=args.fit_initial)
@@ -181,19 +243,24 @@ def cmd_predict(args: argparse.Namespace) -> int:
     for i in range(len(run)):
         lines.append(",".join(f"{cols[n][i]:.6f}" for n in names))
     write_atomic(args.out, "\n".join(lines) + "\n")
-    _say(args, f"wrote {args.out}: {', '.join(names[1:])} for {len(run)} samples")
+    if args.json:
+        _print_json({"out": args.out, "columns": names[1:], "samples": len(run)})
+    else:
+        _say(args, f"wrote {args.out}: {', '.join(names[1:])} for {len(run)} samples")
     return 0
 
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
     from .thermal import Machine
 
+    _check_out(args.out, args.run, args.machine)
     machine = Machine.load(args.machine)
     run = read_run(args.run, nan=args.nan)
+    _stage(args, f"calibrating {args.machine} on {run.source} ...")
     cal, info = machine.calibrate(run, args.axis)
     cal.save(args.out)
     if args.json:
-        print(json.dumps(info, indent=1))
+        _print_json(info)
     else:
         _say(args, f"calibrated {args.machine} on {run.source} ({info['n_iter']} iterations, "
                    f"normalised RMS residual {(info['ssr'] / info['n_data']) ** 0.5:.2f}); wrote {args.out}")
@@ -203,15 +270,18 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 def cmd_diagnose(args: argparse.Namespace) -> int:
     from .thermal import Machine, diagnose
 
+    for given in (args.run, args.machine, args.holdout):
+        if given and os.path.realpath(os.path.dirname(os.path.abspath(given))) == os.path.realpath(args.out):
+            raise ThermerrError(f"--out {args.out} holds the input {given}: choose another directory")
     machine = Machine.load(args.machine)
     run = read_run(args.run, nan=args.nan)
     hold = read_run(args.holdout, nan=args.nan) if args.holdout else None
-    if _progress_enabled(args):
-        print("calibrating the baseline and every candidate extension ...", file=sys.stderr)
+    _stage(args, f"diagnosing {args.machine} on {run.source}: calibrating the baseline and every "
+                 "candidate extension ...")
     d = diagnose(run, machine, hold, axis=args.axis)
     page = d.write(args.out)
     if args.json:
-        print(json.dumps(d.report, indent=1))
+        _print_json(d.report)
     else:
         print(d)
         print(f"report: {page}")
@@ -225,7 +295,7 @@ def cmd_stiffness(args: argparse.Namespace) -> int:
     run = read_run(args.run, nan=args.nan)
     res = key_thermal_stiffness(model, run, at=args.at, eta=args.eta, target=args.axis)
     if args.json:
-        print(json.dumps(res.to_dict(), indent=1))
+        _print_json(res.to_dict())
     else:
         print(res.table())
     return 0
@@ -239,7 +309,7 @@ def build_parser() -> argparse.ArgumentParser:
     def common(sp: argparse.ArgumentParser) -> None:
         sp.add_argument("--nan", choices=["error", "drop", "interpolate"], default="error",
                         help="what to do with missing values in the run (default: error)")
-        sp.add_argument("--quiet", action="store_true", help="no progress bars or chatter")
+        sp.add_argument("--quiet", action="store_true", help="no progress or chatter (the results are still printed; --json prints only them)")
         sp.add_argument("--json", action="store_true", help="print results as JSON")
 
     f = sub.add_parser("fit", help="fit a thermal error model to a run and save it")
@@ -247,25 +317,25 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--axis", required=True, help="error column to model, e.g. E_z")
     f.add_argument("--model", choices=["mlr", "rbf", "svr", "greybp", "gm1n", "bp", "hybrid"], default="mlr")
     f.add_argument("--sensors", default="all", help="'all' (default), 'auto' (fuzzy c-means selection) or T_a,T_b,...")
-    f.add_argument("--n-clusters", type=int, default=4, help="clusters for --sensors auto (default 4)")
-    f.add_argument("--seed", type=int, default=0, help="seed of every stochastic step (default 0)")
+    f.add_argument("--n-clusters", type=_positive_int, default=4, help="clusters for --sensors auto (default 4)")
+    f.add_argument("--seed", type=_nonneg_int, default=0, help="seed of every stochastic step (default 0)")
     f.add_argument("--design", choices=["exact", "ols", "kmeans"], default="ols", help="RBF design (default ols)")
     f.add_argument("--spread", type=float, default=1.0, help="RBF spread on [0,1]-scaled inputs (default 1.0)")
     f.add_argument("--goal", type=float, default=None,
                    help="RBF sum-squared error goal in µm² (default: 0.1 µm² per training sample)")
-    f.add_argument("--max-neurons", type=int, default=None)
-    f.add_argument("--n-centers", type=int, default=None, help="centres of the kmeans design")
+    f.add_argument("--max-neurons", type=_positive_int, default=None)
+    f.add_argument("--n-centers", type=_positive_int, default=None, help="centres of the kmeans design")
     f.add_argument("--C", type=float, default=1.0, help="SVR box constraint (default 1; searched with --tune)")
     f.add_argument("--epsilon", type=float, default=0.1, help="SVR tube half-width in µm (default 0.1)")
     f.add_argument("--gamma", type=float, default=None, help="SVR RBF gamma (default: 'scale'; searched with --tune)")
     f.add_argument("--tune", choices=["cso", "pso"], default=None,
                    help="search SVR C and gamma by k-fold CV MSE with chicken swarm or particle swarm (seed 004)")
-    f.add_argument("--cv", type=int, default=5, help="folds of the --tune search (default 5)")
-    f.add_argument("--pop", type=int, default=20, help="swarm population of --tune (default 20)")
-    f.add_argument("--iters", type=int, default=100, help="swarm generations of --tune (default 100)")
-    f.add_argument("--windows", type=int, nargs="+", default=[6, 8, 10], help="GM(1,N) windows of greybp (default 6 8 10)")
-    f.add_argument("--window", type=int, default=8, help="GM(1,N) window of gm1n (default 8)")
-    f.add_argument("--hidden", type=int, default=None, help="hidden units of bp/greybp (7) or hybrid (30)")
+    f.add_argument("--cv", type=_positive_int, default=5, help="folds of the --tune search (default 5)")
+    f.add_argument("--pop", type=_positive_int, default=20, help="swarm population of --tune (default 20)")
+    f.add_argument("--iters", type=_positive_int, default=100, help="swarm generations of --tune (default 100)")
+    f.add_argument("--windows", type=_positive_int, nargs="+", default=[6, 8, 10], help="GM(1,N) windows of greybp (default 6 8 10)")
+    f.add_argument("--window", type=_positive_int, default=8, help="GM(1,N) window of gm1n (default 8)")
+    f.add_argument("--hidden", type=_positive_int, default=None, help="hidden units of bp/greybp (7) or hybrid (30)")
     f.add_argument("--trainer", choices=["adam", "seed"], default="adam",
                    help="network trainer: adam (default) or the seed's gradient descent with momentum")
     f.add_argument("--variant", choices=["hybrid", "arma", "lrnn", "fnn"], default="hybrid",
@@ -290,8 +360,8 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("select-sensors", help="pick one sensor per fuzzy c-means cluster (seed 003)")
     s.add_argument("run", help="measured run CSV")
     s.add_argument("--axis", required=True, help="error column, or several comma-separated for a composite")
-    s.add_argument("--n-clusters", type=int, default=4)
-    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--n-clusters", type=_positive_int, default=4)
+    s.add_argument("--seed", type=_nonneg_int, default=0)
     common(s)
     s.set_defaults(func=cmd_select)
 
@@ -299,7 +369,7 @@ def build_parser() -> argparse.ArgumentParser:
     pr.add_argument("run", help="measured run CSV (its inputs and boundary columns drive the model)")
     pr.add_argument("--machine", required=True, help="machine TOML")
     pr.add_argument("--out", required=True, help="CSV to write: time_s, E_<axis>_pred, T_<sensor>_pred")
-    pr.add_argument("--fit-initial", type=int, default=0, metavar="N",
+    pr.add_argument("--fit-initial", type=_nonneg_int, default=0, metavar="N",
                     help="estimate the sensed nodes' start from the first N readings (default: first reading)")
     common(pr)
     pr.set_defaults(func=cmd_predict)
@@ -332,6 +402,17 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _exit_code(e: BaseException) -> int:
+    """1 when valid input could not be computed or written; 2 for bad usage or input."""
+    if isinstance(e, (NumericalError, ConvergenceError)):
+        return 1
+    if isinstance(e, (FileNotFoundError, IsADirectoryError, NotADirectoryError, PermissionError)):
+        return 2
+    if isinstance(e, OSError):  # a full disk, an I/O error
+        return 1
+    return 2
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -339,11 +420,22 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.quiet = True
     try:
         rc: int = args.func(args)
+        sys.stdout.flush()
         return rc
+    except BrokenPipeError:
+        # the reader went away (| head): say nothing, and keep Python from complaining at exit
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 141
+    except KeyboardInterrupt:
+        print("thermerr: interrupted", file=sys.stderr)
+        return 130
     except (ThermerrError, OSError, KeyError, ValueError) as e:
         msg = str(e.args[0]) if isinstance(e, KeyError) and e.args else str(e)
+        if isinstance(e, OSError) and e.filename and str(e.filename) not in msg:
+            msg = f"{e.filename}: {msg}"
         print(f"thermerr: error: {msg}", file=sys.stderr)
-        return 2
+        return _exit_code(e)
 
 
 if __name__ == "__main__":

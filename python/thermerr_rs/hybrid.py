@@ -67,6 +67,8 @@ class HybridFilterNet(_Sequential):
         """Fit on several runs (their lags never cross from one run into the next)."""
         if not runs:
             raise ShapeError("no runs to fit on")
+        for r in runs:
+            r.check_fit_columns(target, list(features))
         xs = [r.input_matrix(features, inputs) for r in runs]
         ys = [r[target] for r in runs]
         starts = [int(s) for s in np.cumsum([len(v) for v in ys])[:-1]]

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ._io import write_atomic
+from ._io import write_set
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -151,16 +151,14 @@ def write_report(
     calibrated_toml: str,
     extended_toml: str,
 ) -> Path:
-    """Render everything, then write the four files (each atomically) into ``out_dir``."""
+    """Render everything, then write the four files into ``out_dir`` as one set (all or nothing;
+    a previous output there is replaced whole, see ``_io.write_set``)."""
     page = render_html(report, series)
     doc = json.dumps(report, indent=1, allow_nan=False)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    for name, text in (
-        ("calibrated.toml", calibrated_toml),
-        ("extended.toml", extended_toml),
-        ("report.json", doc),
-        ("report.html", page),
-    ):
-        write_atomic(out / name, text)
+    out = write_set(out_dir, {
+        "calibrated.toml": calibrated_toml,
+        "extended.toml": extended_toml,
+        "report.json": doc,
+        "report.html": page,
+    })
     return out / "report.html"

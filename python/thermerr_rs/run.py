@@ -94,6 +94,23 @@ class Run:
             raise DataError("no columns asked for")
         return np.ascontiguousarray(np.column_stack([self[n] for n in names]))
 
+    def check_fit_columns(self, target: str, features: list[str]) -> None:
+        """Checks the columns of a fit before anything is computed: the
+        target is an error (``E_*``) column and no input is an error column (a model fitted with
+        its own target, or another probe's error, among its inputs looks perfect and compensates
+        nothing). Every ``fit_run`` goes through here."""
+        if not target.startswith("E_"):
+            raise ParameterError(f"{self.source}: the target `{target}` is not an error column (E_*); "
+                                 f"error columns are: {', '.join(self.errors) or 'none'}")
+        leaks = [f for f in features if f.startswith("E_")]
+        if leaks:
+            raise ParameterError(f"{self.source}: error column(s) {', '.join(leaks)} among the inputs; "
+                                 "inputs are temperatures (T_*) and machine inputs (U_*)")
+        if not features:
+            raise ParameterError(f"{self.source}: no input columns given")
+        for name in [target, *features]:
+            self[name]  # raises MissingColumnError naming the column and the file
+
     def input_matrix(self, features: list[str], form: str = "absolute") -> F64:
         """The model inputs built from the named columns: ``form="absolute"`` the readings as
         they are, ``"rise"`` each reading minus the run's first sample (like the error itself,

@@ -47,6 +47,18 @@ class SensorSelection:
         """{sensor: hardened cluster index}."""
         return {s: k for k, names in self.clusters.items() for s in names}
 
+    def to_dict(self) -> dict[str, Any]:
+        """The selection as plain data (what ``thermerr select-sensors --json`` prints)."""
+        return {
+            "axis": self.axis,
+            "selected": list(self.selected),
+            "clusters": {str(k): list(v) for k, v in self.clusters.items()},
+            "correlations": {k: float(v) for k, v in self.correlations.items()},
+            "weights": {k: float(v) for k, v in self.weights.items()},
+            "sensors": list(self.sensors),
+            "membership": [[float(v) for v in row] for row in np.asarray(self.membership)],
+        }
+
     def __str__(self) -> str:
         if isinstance(self.axis, str):
             target = self.axis

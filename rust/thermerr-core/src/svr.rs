@@ -728,10 +728,11 @@ fn solve(
         if max_iter.is_some_and(|m| iter >= m) {
             break;
         }
+        // one relaxed load per iteration, next to O(l) work: every fit of a search stops at once
+        crate::interrupt::check()?;
         counter -= 1;
         if counter == 0 {
             counter = l.min(1000);
-            crate::interrupt::check()?;
             if shrinking {
                 s.do_shrinking();
                 first = None;

@@ -308,7 +308,10 @@ fn eval<F>(f: &mut F, pop: &[Vec<f64>], n_evals: &mut usize) -> Result<Vec<f64>>
 where
     F: FnMut(&[Vec<f64>]) -> Result<Vec<f64>>,
 {
+    // every generation of either swarm passes here: the place to honour an interrupt
+    crate::interrupt::check()?;
     let mut v = f(pop)?;
+    crate::interrupt::check()?;
     if v.len() != pop.len() {
         return Err(Error::Shape(format!(
             "swarm objective returned {} values for a population of {}",
@@ -568,7 +571,6 @@ where
     let mut history = Vec::with_capacity(params.iters);
 
     for _ in 0..params.iters {
-        crate::interrupt::check()?;
         for i in 0..n {
             for j in 0..d {
                 let r1 = rng.random::<f64>();

@@ -231,6 +231,8 @@ pub fn tune_svr(
                 fold_mse(&parts[t % nf], d, &params.svr_at(c, g))
             })
             .collect();
+        // a fold whose fit failed scores infinity, an interrupted one too: stop here instead
+        crate::interrupt::check()?;
         let out: Vec<f64> = per
             .chunks(nf)
             .map(|c| c.iter().sum::<f64>() / nf as f64)

@@ -1,7 +1,8 @@
 //! `thermerr-edge MODEL.json [RUN.csv]`: reads CSV rows (a header first) from the file or from
 //! stdin and writes `time_s,E_<axis>_pred` line by line as rows arrive, flushing each line, so it
 //! can sit in a pipe from a data logger. A bad row is reported on stderr with its line number and
-//! skipped. The model's feature columns are picked by name; other columns are ignored.
+//! skipped. The model's feature columns are picked by name; other columns are ignored. Exit
+//! status 2 for bad usage, a bad model or header, or when every data row was rejected.
 //!
 //! `--bench-latency N` times N predictions over the run's rows (cycling, with a reset at each
 //! pass) and prints per-sample latency percentiles and the peak resident memory as JSON.
@@ -108,12 +109,14 @@ fn run(p: &mut Predictor, input: Box<dyn BufRead>, bench: Option<usize>) -> Exit
         return ExitCode::SUCCESS; // the reader went away
     }
     let mut row = 0usize;
+    let mut rejected = 0usize;
     for (k, line) in lines.enumerate() {
         let lineno = k + 2;
         let line = match line {
             Ok(l) => l,
             Err(e) => {
                 eprintln!("thermerr-edge: line {lineno}: {e}; skipped");
+                rejected += 1;
                 continue;
             }
         };
@@ -133,10 +136,22 @@ fn run(p: &mut Predictor, input: Box<dyn BufRead>, bench: Option<usize>) -> Exit
                     }
                     row += 1;
                 }
-                Err(e) => eprintln!("thermerr-edge: line {lineno}: {e}; skipped"),
+                Err(e) => {
+                    eprintln!("thermerr-edge: line {lineno}: {e}; skipped");
+                    rejected += 1;
+                }
             },
-            Err(e) => eprintln!("thermerr-edge: line {lineno}: {e}; skipped"),
+            Err(e) => {
+                eprintln!("thermerr-edge: line {lineno}: {e}; skipped");
+                rejected += 1;
+            }
         }
+    }
+    if row == 0 && rejected > 0 {
+        // nothing came out: the input does not fit the model, which is not a success
+        return fail(format!(
+            "every data row ({rejected}) was rejected: no compensation was computed"
+        ));
     }
     ExitCode::SUCCESS
 }
