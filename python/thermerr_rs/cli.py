@@ -236,12 +236,13 @@ def cmd_fleet(args: argparse.Namespace) -> int:
     from . import fleet
 
     if args.scheduler is not None and args.workers is not None:
-        raise ThermerrError("--workers sets the threads of the local scheduler; with --scheduler the cluster has its own")
+        raise ThermerrError("--workers sets the local scheduler's threads; with --scheduler the cluster has its own")
     sched = {"scheduler": args.scheduler, "workers": args.workers, "nan": args.nan}
     if args.fleet_command == "fit":
-        sensors = None if args.sensors in (None, "all", "auto") else [s.strip() for s in args.sensors.split(",") if s.strip()]
+        sensors: Any = args.sensors if args.sensors in ("all", "auto") else [
+            s.strip() for s in args.sensors.split(",") if s.strip()]
         rows = fleet.fit_runs(args.runs, args.axis, args.model, args.out, seed=args.seed, inputs=args.inputs,
-                              sensors="auto" if args.sensors == "auto" else sensors, n_clusters=args.n_clusters, **sched)
+                              sensors=sensors, n_clusters=args.n_clusters, **sched)
     elif args.fleet_command == "evaluate":
         rows = fleet.evaluate_runs(args.model, args.runs, args.axis, out_dir=args.out, **sched)
     else:
@@ -255,7 +256,8 @@ def cmd_fleet(args: argparse.Namespace) -> int:
         if args.out:
             _say(args, f"summary: {args.out}/{fleet.SUMMARY}.json, {fleet.SUMMARY}.csv")
     if failed:
-        print(f"thermerr: {len(failed)} of {len(rows)} runs failed: {', '.join(r.run for r in failed)}", file=sys.stderr)
+        names = ", ".join(r.run for r in failed)
+        print(f"thermerr: {len(failed)} of {len(rows)} runs failed: {names}", file=sys.stderr)
         return 1
     return 0
 
@@ -359,14 +361,15 @@ def build_parser() -> argparse.ArgumentParser:
     common(st)
     st.set_defaults(func=cmd_stiffness)
 
-    fl = sub.add_parser("fleet", help="fit, evaluate or diagnose many runs in parallel on Dask (exit 1 if some fail)")
+    fl = sub.add_parser("fleet", help="fit, evaluate or diagnose many runs in parallel on Dask (exit 1: some failed)")
     flsub = fl.add_subparsers(dest="fleet_command", required=True)
     runs_help = "a directory (every *.csv in it) or run files"
     flf = flsub.add_parser("fit", help="one model per run, saved as OUT/<run>.json")
     flf.add_argument("runs", nargs="+", help=runs_help)
     flf.add_argument("--axis", required=True, help="error column to model, e.g. E_z")
     flf.add_argument("--model", choices=["mlr", "rbf", "svr", "greybp", "gm1n", "bp", "hybrid"], default="mlr")
-    flf.add_argument("--sensors", default="all", help="'all' (default), 'auto' (fuzzy c-means per run) or T_a,T_b,...")
+    flf.add_argument("--sensors", default="all",
+                     help="'all' (default), 'auto' (fuzzy c-means per run) or T_a,T_b,...")
     flf.add_argument("--n-clusters", type=int, default=4, help="clusters for --sensors auto (default 4)")
     flf.add_argument("--seed", type=int, default=0, help="seed of every run's stochastic steps (default 0)")
     flf.add_argument("--inputs", choices=["rise", "absolute"], default="rise")
@@ -380,7 +383,8 @@ def build_parser() -> argparse.ArgumentParser:
     fld.add_argument("runs", nargs="+", help=runs_help)
     fld.add_argument("--machine", required=True, help="nominal machine TOML")
     fld.add_argument("--axis", default=None, help="error axis (default: the machine's first)")
-    fld.add_argument("--out", required=True, help="directory for OUT/<run>/report.* and fleet-summary.{json,csv}")
+    fld.add_argument("--out", required=True,
+                     help="directory for OUT/<run>/report.* and fleet-summary.{json,csv}")
     for sp in (flf, fle, fld):
         sp.add_argument("--scheduler", default=None, metavar="ADDR",
                         help="a dask scheduler, host:port or tcp://... (default: threads on this machine)")

@@ -42,6 +42,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import math
 import os
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -148,7 +149,12 @@ def _guarded(path: str, work: Callable[[], tuple[str | None, dict[str, Any]]]) -
 def _score_figures(s: Any) -> dict[str, Any]:
     d = s.as_dict()
     d.pop("accuracy_excluded", None)
-    return d
+    return _finite(d)
+
+
+def _finite(d: dict[str, Any]) -> dict[str, Any]:
+    """Non-finite floats as ``None``: the summary is strict JSON."""
+    return {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in d.items()}
 
 
 def _build(model: str | Estimator, params: Mapping[str, Any], seed: int, y: Any) -> Estimator:
@@ -256,8 +262,8 @@ def _diagnose_task(path: str, machine_toml: str, machine_file: str, axis: str | 
         target = Path(out_dir) / Path(path).stem
         d.write(target)
         b, e = d.report["baseline"], d.report["extended"]
-        return str(target), {"verdict": d.verdict, "column": d.column, "gain_pct": d.gain_pct,
-                             "baseline_rms": float(b["rmse_um"]), "extended_rms": float(e["rmse_um"])}
+        return str(target), _finite({"verdict": d.verdict, "column": d.column, "gain_pct": d.gain_pct,
+                                     "baseline_rms": float(b["rmse_um"]), "extended_rms": float(e["rmse_um"])})
 
     return _guarded(path, work)
 
