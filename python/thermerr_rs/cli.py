@@ -7,6 +7,7 @@
     thermerr calibrate RUN.csv --machine M.toml --out CAL.toml
     thermerr diagnose RUN.csv --machine M.toml --out DIR [--holdout TEST.csv]
     thermerr stiffness MODEL.json RUN.csv [--at SECONDS] [--eta 0.5]
+    thermerr fleet fit|evaluate|diagnose DIR_OR_RUNS... [--scheduler ADDR] [--workers N]  (exit 1: some runs failed)
 
 Exit status: 0 done; 1 the computation failed on valid input (a numerical failure, no
 convergence) or an output could not be written (a full disk); 2 a usage error or bad input (a
@@ -301,6 +302,36 @@ def cmd_stiffness(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_fleet(args: argparse.Namespace) -> int:
+    from . import fleet
+
+    if args.scheduler is not None and args.workers is not None:
+        raise ThermerrError("--workers sets the local scheduler's threads; with --scheduler the cluster has its own")
+    sched = {"scheduler": args.scheduler, "workers": args.workers, "nan": args.nan}
+    if args.fleet_command == "fit":
+        sensors: Any = args.sensors if args.sensors in ("all", "auto") else [
+            s.strip() for s in args.sensors.split(",") if s.strip()]
+        rows = fleet.fit_runs(args.runs, args.axis, args.model, args.out, seed=args.seed, inputs=args.inputs,
+                              sensors=sensors, n_clusters=args.n_clusters, **sched)
+    elif args.fleet_command == "evaluate":
+        rows = fleet.evaluate_runs(args.model, args.runs, args.axis, out_dir=args.out, **sched)
+    else:
+        rows = fleet.diagnose_runs(args.runs, args.machine, args.out, axis=args.axis, **sched)
+    failed = [r for r in rows if not r.ok]
+    if args.json:
+        print(json.dumps({"n_runs": len(rows), "n_failed": len(failed), "runs": [r.as_dict() for r in rows]},
+                         indent=1, default=str))
+    else:
+        print(fleet.table(rows))
+        if args.out:
+            _say(args, f"summary: {args.out}/{fleet.SUMMARY}.json, {fleet.SUMMARY}.csv")
+    if failed:
+        names = ", ".join(r.run for r in failed)
+        print(f"thermerr: {len(failed)} of {len(rows)} runs failed: {names}", file=sys.stderr)
+        return 1
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="thermerr", description="Machine-tool thermal error models and diagnosis.")
     p.add_argument("--version", action="version", version=f"thermerr_rs {__version__}")
@@ -399,6 +430,37 @@ def build_parser() -> argparse.ArgumentParser:
     st.add_argument("--axis", default=None, help="error column (default: the model's target)")
     common(st)
     st.set_defaults(func=cmd_stiffness)
+
+    fl = sub.add_parser("fleet", help="fit, evaluate or diagnose many runs in parallel on Dask (exit 1: some failed)")
+    flsub = fl.add_subparsers(dest="fleet_command", required=True)
+    runs_help = "a directory (every *.csv in it) or run files"
+    flf = flsub.add_parser("fit", help="one model per run, saved as OUT/<run>.json")
+    flf.add_argument("runs", nargs="+", help=runs_help)
+    flf.add_argument("--axis", required=True, help="error column to model, e.g. E_z")
+    flf.add_argument("--model", choices=["mlr", "rbf", "svr", "greybp", "gm1n", "bp", "hybrid"], default="mlr")
+    flf.add_argument("--sensors", default="all",
+                     help="'all' (default), 'auto' (fuzzy c-means per run) or T_a,T_b,...")
+    flf.add_argument("--n-clusters", type=int, default=4, help="clusters for --sensors auto (default 4)")
+    flf.add_argument("--seed", type=int, default=0, help="seed of every run's stochastic steps (default 0)")
+    flf.add_argument("--inputs", choices=["rise", "absolute"], default="rise")
+    flf.add_argument("--out", required=True, help="directory for the models and fleet-summary.{json,csv}")
+    fle = flsub.add_parser("evaluate", help="figures of merit of one saved model on every run")
+    fle.add_argument("model", help="model JSON written by 'thermerr fit'")
+    fle.add_argument("runs", nargs="+", help=runs_help)
+    fle.add_argument("--axis", default=None, help="error column (default: the model's target)")
+    fle.add_argument("--out", default=None, help="directory for fleet-summary.{json,csv} (default: none written)")
+    fld = flsub.add_parser("diagnose", help="diagnose every run against one machine model, a report per run")
+    fld.add_argument("runs", nargs="+", help=runs_help)
+    fld.add_argument("--machine", required=True, help="nominal machine TOML")
+    fld.add_argument("--axis", default=None, help="error axis (default: the machine's first)")
+    fld.add_argument("--out", required=True,
+                     help="directory for OUT/<run>/report.* and fleet-summary.{json,csv}")
+    for sp in (flf, fle, fld):
+        sp.add_argument("--scheduler", default=None, metavar="ADDR",
+                        help="a dask scheduler, host:port or tcp://... (default: threads on this machine)")
+        sp.add_argument("--workers", type=int, default=None, help="threads of the local scheduler (default: CPUs)")
+        common(sp)
+        sp.set_defaults(func=cmd_fleet)
     return p
 
 

@@ -54,6 +54,10 @@ class ModelFormatError(ThermerrError, ValueError):
     """A model file that this version cannot read (schema version, kind, missing field)."""
 
 
+class MissingDependencyError(ThermerrError, ImportError):
+    """An optional dependency is not installed; the message names the extra to install."""
+
+
 __all__ = [
     "ThermerrError",
     "ParameterError",
@@ -65,4 +69,5 @@ __all__ = [
     "ConvergenceError",
     "NotFittedError",
     "ModelFormatError",
+    "MissingDependencyError",
 ]
