@@ -7,8 +7,14 @@ cd "$(dirname "$0")/.."
 # shellcheck disable=SC1091
 . .venv/bin/activate
 python -m pip install -q --upgrade pip
-python -m pip install -q ".[report]"
 mkdir -p out
+echo "== 0. Building the Rust extension and installing thermerr_rs into .venv"
+echo "   (the first build compiles ~150 crates: about 5 minutes on 2 cores; cargo's progress follows,"
+echo "   the whole log is in out/build.log)"
+# pip is silent while cargo runs; its verbose log carries cargo's lines, shown as they come
+python -m pip install -v ".[report]" 2>&1 | tee out/build.log \
+    | awk '/ Compiling | Finished |Successfully installed|^error/ { print "   " $0; fflush() }'
+
 
 echo
 echo "== 1. What does the machine model get wrong? (VMC, 20 h run, nominal model 15-35 % off)"

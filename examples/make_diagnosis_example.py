@@ -23,7 +23,7 @@ from thermerr_rs._io import write_atomic
 
 
 def main() -> None:
-    here = Path(__file__).resolve().parent
+    here = Path(__file__).resolve().parents[1] / "python" / "thermerr_rs" / "examples"  # shipped in the wheel; examples/ links to it
     case = syn.make_case("vmc", "thermal_lag", 7, train_duty="stepped", test_duty="random")
     write_atomic(here / "vmc_nominal.toml", "# nominal model of the synthetic VMC (made by make_diagnosis_example.py)\n" + case.nominal_toml())
     syn.write_run_csv(here / "vmc_run.csv", case.train)

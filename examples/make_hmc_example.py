@@ -98,7 +98,7 @@ def run(mach: tr.Machine, schedule: list[tuple[float, float]], ambient0: float, 
 
 
 def main() -> None:
-    here = Path(__file__).resolve().parent
+    here = Path(__file__).resolve().parents[1] / "python" / "thermerr_rs" / "examples"  # shipped in the wheel; examples/ links to it
     text = "# the bundled HMC example's machine (made by make_hmc_example.py)\n" + to_toml(machine())
     (here / "hmc_machine.toml").write_text(text)
     mach = tr.Machine.from_toml(text, "hmc_machine.toml")

@@ -45,7 +45,7 @@ def machine() -> dict:
 
 
 def main() -> None:
-    here = Path(__file__).resolve().parent
+    here = Path(__file__).resolve().parents[1] / "python" / "thermerr_rs" / "examples"  # shipped in the wheel; examples/ links to it
     text = "# the seed-002 turning-centre example's machine (made by make_lathe_example.py)\n" + to_toml(machine())
     (here / "lathe_machine.toml").write_text(text)
     mach = tr.Machine.from_toml(text, "lathe_machine.toml")

@@ -73,7 +73,7 @@ def run(mach: tr.Machine, rpm: float, ambient0: float, seed: int) -> dict:
 
 
 def main() -> None:
-    here = Path(__file__).resolve().parent
+    here = Path(__file__).resolve().parents[1] / "python" / "thermerr_rs" / "examples"  # shipped in the wheel; examples/ links to it
     text = "# the seed-004 spindle example's machine (made by make_spindle_example.py)\n" + to_toml(machine())
     (here / "spindle_machine.toml").write_text(text)
     mach = tr.Machine.from_toml(text, "spindle_machine.toml")

@@ -89,3 +89,13 @@ def test_fit_sequential_and_network_models(model, tmp_path, capsys):
     m = tr.load_model(out)
     assert m.kind == model and np.isfinite(report["train"]["rms"])
     assert main(["evaluate", str(out), str(EXAMPLES / "lathe_run.csv"), "--json"]) == 0
+
+
+def test_examples_are_shipped_with_the_package(tmp_path):
+    # a pip-installed user has no examples/ directory: the command copies the bundled files out
+    r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", "examples", str(tmp_path / "ex")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "ex" / "vmc_run.csv").read_bytes() == tr.examples.path("vmc_run.csv").read_bytes()
+    run = tr.read_run(tmp_path / "ex" / "hmc_run1.csv")
+    assert len(run) > 100 and "E_z" in run.names

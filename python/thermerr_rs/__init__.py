@@ -20,6 +20,7 @@ from .errors import (
     ShapeError,
     ThermerrError,
 )
+from . import examples
 from .fcm import FuzzyCMeans
 from .grey import GM1N, BPNetwork, GreyBP
 from .hybrid import HybridFilterNet
@@ -37,6 +38,7 @@ from .thermal import Diagnosis, Machine, Simulation, diagnose
 __all__ = [
     "__version__",
     "FORMAT_VERSION",
+    "examples",
     "Estimator",
     "Regressor",
     "SequenceModel",

@@ -7,6 +7,7 @@
     thermerr calibrate RUN.csv --machine M.toml --out CAL.toml
     thermerr diagnose RUN.csv --machine M.toml --out DIR [--holdout TEST.csv]
     thermerr stiffness MODEL.json RUN.csv [--at SECONDS] [--eta 0.5]
+    thermerr examples [DIR]
     thermerr fleet fit|evaluate|diagnose DIR_OR_RUNS... [--scheduler ADDR] [--workers N]  (exit 1: some runs failed)
 
 Exit status: 0 done; 1 the computation failed on valid input (a numerical failure, no
@@ -332,6 +333,24 @@ def cmd_fleet(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_examples(args: argparse.Namespace) -> int:
+    from . import examples
+
+    written = examples.copy_to(args.dir)
+    if args.json:
+        _print_json({"dir": args.dir, "files": [p.name for p in written]})
+        return 0
+    d = args.dir
+    print(f"copied {len(written)} example files into {d}/: {', '.join(p.name for p in written)}")
+    print("try:")
+    print(f"  thermerr diagnose {d}/vmc_run.csv --machine {d}/vmc_nominal.toml --out out/diagnosis")
+    print(f"  thermerr fit {d}/hmc_run1.csv --axis E_z --model rbf --sensors auto --test {d}/hmc_run2.csv "
+          "--out out/rbf.json")
+    print(f"  thermerr fit {d}/spindle_3000rpm.csv --axis E_z --model svr --tune cso "
+          f"--test {d}/spindle_2000rpm.csv --out out/svr.json")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="thermerr", description="Machine-tool thermal error models and diagnosis.")
     p.add_argument("--version", action="version", version=f"thermerr_rs {__version__}")
@@ -421,6 +440,11 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--axis", default=None, help="error axis (default: the machine's first)")
     common(dg)
     dg.set_defaults(func=cmd_diagnose)
+
+    ex = sub.add_parser("examples", help="copy the bundled example runs and machine models into a directory")
+    ex.add_argument("dir", nargs="?", default="thermerr-examples", help="where to copy them (default thermerr-examples)")
+    common(ex)
+    ex.set_defaults(func=cmd_examples)
 
     st = sub.add_parser("stiffness", help="key thermal stiffness: which sensor's element governs the axis (seed 001)")
     st.add_argument("model", help="model JSON written by 'thermerr fit'")
