@@ -207,6 +207,8 @@ fn ambient_series<'a>(mach: &Machine, run: &RunView<'a>) -> Result<std::borrow::
 
 /// Distinct step lengths whose transition matrices are kept at once.
 const MAX_STEP_LENGTHS: usize = 1024;
+/// Widest range of step lengths (in grid steps) whose matrices are built by products.
+const CHAIN_SPAN: i64 = 4096;
 
 /// The time axis on a grid of `q` seconds, a power of two near 1/1000 of the mean step.
 ///
@@ -290,7 +292,48 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
     }
     let mut out = vec![0.0; n_t * nn];
     let ticks = Ticks::new(t);
+    let augmented = |h: f64| {
+        let mut big = DMatrix::<f64>::zeros(2 * nd, 2 * nd);
+        big.view_mut((0, 0), (nd, nd)).copy_from(&net.m);
+        for p in 0..nd {
+            big[(p, nd + p)] = 1.0;
+        }
+        big * h
+    };
+    let split = |e: &DMatrix<f64>| {
+        (
+            e.view((0, 0), (nd, nd)).into_owned(),
+            e.view((0, nd), (nd, nd)).into_owned(),
+        )
+    };
     let mut cache: HashMap<i64, (DMatrix<f64>, DMatrix<f64>)> = HashMap::new();
+    {
+        // many distinct step lengths close together (a jittering logger): e^{B·(m+1)q} =
+        // e^{B·mq}·e^{Bq}, so one exponential for the shortest step and one for the grid step,
+        // then a small product per grid step up to the longest, instead of one exponential each
+        let mut steps: Vec<i64> = t
+            .windows(2)
+            .map(|w| ticks.at(w[1]) - ticks.at(w[0]))
+            .collect();
+        steps.sort_unstable();
+        steps.dedup();
+        if let (Some(&lo), Some(&hi)) = (steps.first(), steps.last()) {
+            if steps.len() > 2 && steps.len() <= MAX_STEP_LENGTHS && hi - lo <= CHAIN_SPAN {
+                let eq = expm(&augmented(ticks.q));
+                let mut e = expm(&augmented(lo as f64 * ticks.q));
+                let mut want = steps.iter().peekable();
+                for m in lo..=hi {
+                    if want.peek() == Some(&&m) {
+                        cache.insert(m, split(&e));
+                        want.next();
+                    }
+                    if m < hi {
+                        e = &e * &eq;
+                    }
+                }
+            }
+        }
+    }
     let mut f = vec![0.0; nd];
     let mut xn = vec![0.0; nd];
     for k in 0..n_t {
@@ -326,19 +369,11 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
             *fp /= c;
         }
         if !cache.contains_key(&steps) {
-            let h = steps as f64 * ticks.q;
-            let mut big = DMatrix::<f64>::zeros(2 * nd, 2 * nd);
-            big.view_mut((0, 0), (nd, nd)).copy_from(&net.m);
-            for p in 0..nd {
-                big[(p, nd + p)] = 1.0;
-            }
-            let e = expm(&(big * h));
-            let phi = e.view((0, 0), (nd, nd)).into_owned();
-            let gam = e.view((0, nd), (nd, nd)).into_owned();
+            let e = expm(&augmented(steps as f64 * ticks.q));
             if cache.len() >= MAX_STEP_LENGTHS {
                 cache.clear();
             }
-            cache.insert(steps, (phi, gam));
+            cache.insert(steps, split(&e));
         }
         let (phi, gam) = &cache[&steps];
         for p in 0..nd {
