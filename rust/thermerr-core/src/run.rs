@@ -57,9 +57,24 @@ impl Run {
     /// Reads a CSV file. Every refusal names the file, and the row/line and column where there is
     /// one.
     pub fn read_csv(path: &Path, nan: NanPolicy) -> Result<Run> {
-        let file = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        let file = std::fs::File::open(path).map_err(|source| Error::Io {
             path: path.to_path_buf(),
+            source,
+        })?;
+        Run::from_csv_reader(file, &path.display().to_string(), nan)
+    }
+
+    /// Reads CSV text from any reader (a file, stdin, bytes in memory): the one parser behind
+    /// [`Run::read_csv`]. `source` names the data in every refusal, as the path does for a file.
+    pub fn from_csv_reader<R: std::io::Read>(
+        mut reader: R,
+        source: &str,
+        nan: NanPolicy,
+    ) -> Result<Run> {
+        let file = source.to_string();
+        let mut bytes = Vec::new();
+        reader.read_to_end(&mut bytes).map_err(|source| Error::Io {
+            path: file.clone().into(),
             source,
         })?;
         let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
