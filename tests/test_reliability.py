@@ -299,3 +299,14 @@ def test_ctrl_c_stops_a_long_tuning(progress):
     waited = time.monotonic() - sent
     assert p.returncode == 130 and "interrupted" in out, (out, err)
     assert waited < 10, waited
+
+
+def test_the_edge_fails_when_every_row_was_rejected(edge_bin, example_run1, tmp_path):
+    model = tmp_path / "m.json"
+    tr.MLR().fit_run(tr.read_run(example_run1), "E_z", ["T_s01", "T_s07"]).save(model)
+    bad = "time_s,T_s01,T_s07\n0,x,1\n15,2,nan\n30,open,circuit\n"
+    r = subprocess.run([str(edge_bin), str(model)], input=bad, capture_output=True, text=True)
+    assert r.returncode == 2 and "every data row (3) was rejected" in r.stderr, r.stderr
+    good = "time_s,T_s01,T_s07\n0,x,1\n15,20,21\n"  # one bad row among good ones is skipped
+    r = subprocess.run([str(edge_bin), str(model)], input=good, capture_output=True, text=True)
+    assert r.returncode == 0 and r.stdout.count("\n") == 2, (r.stdout, r.stderr)

@@ -313,7 +313,8 @@ impl GreyBpModel {
     /// Predicts a whole series: closed loop, or one step ahead from `measured` errors.
     pub fn predict(&self, temps: &[f64], measured: Option<&[f64]>) -> Result<Vec<f64>> {
         let mut st = GreyState::new(self);
-        crate::sequence::run_series(temps, self.n_temps, measured, |row, prev| {
+        let kind = if self.net.is_some() { "greybp" } else { "gm1n" };
+        crate::sequence::run_series(kind, temps, self.n_temps, measured, |row, prev| {
             st.push(self, row, prev)
         })
     }

@@ -183,7 +183,7 @@ impl HybridModel {
     /// Predicts a run: closed loop, or one step ahead from the measured errors.
     pub fn predict(&self, temps: &[f64], measured: Option<&[f64]>) -> Result<Vec<f64>> {
         let mut st = HybridState::new(self);
-        crate::sequence::run_series(temps, self.n_temps, measured, |row, prev| {
+        crate::sequence::run_series("hybrid", temps, self.n_temps, measured, |row, prev| {
             st.push(self, row, prev)
         })
     }

@@ -104,7 +104,10 @@ impl MlrModel {
     pub fn predict(&self, x: Samples<'_>) -> Result<Vec<f64>> {
         check_features(x.ncols(), self.n_features())?;
         x.require_finite("X")?;
-        Ok(x.rows().map(|r| self.predict_one(r)).collect())
+        crate::samples::require_finite_predictions(
+            "mlr",
+            x.rows().map(|r| self.predict_one(r)).collect(),
+        )
     }
 }
 

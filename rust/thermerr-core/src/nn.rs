@@ -197,9 +197,12 @@ impl BpModel {
         crate::linear::check_features(x.ncols(), self.n_features())?;
         x.require_finite("X")?;
         let mut scratch = vec![0.0; self.scratch_len()];
-        Ok(x.rows()
-            .map(|r| self.predict_one(r, &mut scratch))
-            .collect())
+        crate::samples::require_finite_predictions(
+            "bp",
+            x.rows()
+                .map(|r| self.predict_one(r, &mut scratch))
+                .collect(),
+        )
     }
 }
 

@@ -407,17 +407,21 @@ impl RbfModel {
     pub fn predict(&self, x: Samples<'_>) -> Result<Vec<f64>> {
         check_features(x.ncols(), self.n_features())?;
         x.require_finite("X")?;
+        crate::samples::require_finite_predictions("rbf", self.predict_unchecked(x))
+    }
+
+    fn predict_unchecked(&self, x: Samples<'_>) -> Vec<f64> {
         #[cfg(not(feature = "fit"))]
-        return Ok(x.rows().map(|r| self.predict_one(r)).collect());
+        return x.rows().map(|r| self.predict_one(r)).collect();
         #[cfg(feature = "fit")]
         if x.nrows() * self.weights.len() * x.ncols() < 1 << 16 {
-            return Ok(x.rows().map(|r| self.predict_one(r)).collect());
+            return x.rows().map(|r| self.predict_one(r)).collect();
         }
         #[cfg(feature = "fit")]
-        Ok((0..x.nrows())
+        (0..x.nrows())
             .into_par_iter()
             .map(|i| self.predict_one(x.row(i)))
-            .collect())
+            .collect()
     }
 }
 

@@ -62,9 +62,24 @@ impl Run {
     /// Reads a CSV file. Every refusal names the file, and the row/line and column where there is
     /// one.
     pub fn read_csv(path: &Path, nan: NanPolicy) -> Result<Run> {
-        let file = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        let file = std::fs::File::open(path).map_err(|source| Error::Io {
             path: path.to_path_buf(),
+            source,
+        })?;
+        Run::from_csv_reader(file, &path.display().to_string(), nan)
+    }
+
+    /// Reads CSV text from any reader (a file, stdin, bytes in memory): the one parser behind
+    /// [`Run::read_csv`]. `source` names the data in every refusal, as the path does for a file.
+    pub fn from_csv_reader<R: std::io::Read>(
+        mut reader: R,
+        source: &str,
+        nan: NanPolicy,
+    ) -> Result<Run> {
+        let file = source.to_string();
+        let mut bytes = Vec::new();
+        reader.read_to_end(&mut bytes).map_err(|source| Error::Io {
+            path: file.clone().into(),
             source,
         })?;
         let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
@@ -359,13 +374,30 @@ fn interpolate_gaps(t: &[f64], v: &mut [f64]) -> usize {
         filled += 1;
         let after = known.partition_point(|&k| k < i);
         v[i] = match (after.checked_sub(1).map(|a| known[a]), known.get(after)) {
-            (Some(a), Some(&b)) => v[a] + (v[b] - v[a]) * (t[i] - t[a]) / (t[b] - t[a]),
+            (Some(a), Some(&b)) => lerp(t[a], v[a], t[b], v[b], t[i]),
             (Some(a), None) => v[a],
             (None, Some(&b)) => v[b],
             (None, None) => unreachable!("known is non-empty"),
         };
     }
     filled
+}
+
+/// The value at `t` on the line through `(ta, va)` and `(tb, vb)`, `ta < t < tb`, all finite.
+/// Finite however far apart the values are: `vb - va` or `tb - ta` can overflow to infinity
+/// (1e308 and -1e308), so the weight is taken from halved times when the span overflows, and
+/// the values are mixed as a convex combination, kept within `[min(va, vb), max(va, vb)]`
+/// against rounding.
+fn lerp(ta: f64, va: f64, tb: f64, vb: f64, t: f64) -> f64 {
+    let span = tb - ta;
+    let w = if span.is_finite() {
+        (t - ta) / span
+    } else {
+        (t / 2.0 - ta / 2.0) / (tb / 2.0 - ta / 2.0)
+    };
+    let w = w.clamp(0.0, 1.0);
+    let v = va * (1.0 - w) + vb * w;
+    v.clamp(va.min(vb), va.max(vb))
 }
 
 #[cfg(test)]
@@ -464,5 +496,35 @@ mod tests {
         assert_eq!(r.column("T_a").unwrap(), &[20.0, 21.0, 22.0, 23.0]);
         assert_eq!(r.column("E_z").unwrap(), &[0.0, 1.0, 2.0, 2.0]);
         assert_eq!(r.interpolated, 2);
+    }
+
+    /// Found by the `csv_run` fuzz target: a gap between values of opposite sign near the f64
+    /// limit was filled with -inf (their difference overflowed), a non-finite value in a run.
+    #[test]
+    fn interpolation_stays_finite_near_the_limits() {
+        let p = write(b"time_s,T_a\n0,1e308\n1,\n2,-1e308\n");
+        let r = Run::read_csv(&p.0, NanPolicy::Interpolate).unwrap();
+        assert_eq!(r.column("T_a").unwrap(), &[1e308, 0.0, -1e308]);
+        let p = write(b"time_s,T_a\n-1e308,0\n0,\n1e308,4\n");
+        let r = Run::read_csv(&p.0, NanPolicy::Interpolate).unwrap();
+        assert_eq!(r.column("T_a").unwrap(), &[0.0, 2.0, 4.0]);
+        let p = write(b"time_s,T_a\n0,1.7e308\n1,\n2,1.7e308\n");
+        let r = Run::read_csv(&p.0, NanPolicy::Interpolate).unwrap();
+        assert_eq!(r.column("T_a").unwrap(), &[1.7e308; 3]);
+        let p = write(b"time_s,T_a\n0,1\n5e-324,\n1e-323,3\n");
+        let r = Run::read_csv(&p.0, NanPolicy::Interpolate).unwrap();
+        assert_eq!(r.column("T_a").unwrap(), &[1.0, 2.0, 3.0]);
+    }
+
+    #[test]
+    fn reads_from_any_reader() {
+        let r = Run::from_csv_reader(&b"time_s,T_a\n0,1\n1,2\n"[..], "<bytes>", NanPolicy::Error)
+            .unwrap();
+        assert_eq!(r.source, "<bytes>");
+        assert_eq!(r.column("T_a").unwrap(), &[1.0, 2.0]);
+        let e = Run::from_csv_reader(&b"time_s,T_a\n0,x\n"[..], "<bytes>", NanPolicy::Error)
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("<bytes>, line 2, row 1, column `T_a`"), "{e}");
     }
 }

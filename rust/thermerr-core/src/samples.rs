@@ -111,6 +111,26 @@ pub fn require_finite_model(kind: &str, field: &str, v: &[f64]) -> crate::Result
     }
 }
 
+/// Refuses predictions that are not finite numbers: a model whose numbers overflow on this
+/// input (a model file with coefficients near the f64 limit, inputs far outside the training
+/// range) is an error naming the first such sample (0-based), never an `inf` handed on.
+pub fn require_finite_predictions(kind: &str, y: Vec<f64>) -> crate::Result<Vec<f64>> {
+    match y.iter().position(|v| !v.is_finite()) {
+        Some(i) => Err(non_finite_prediction(kind, Some(i), y[i])),
+        None => Ok(y),
+    }
+}
+
+/// The error of [`require_finite_predictions`] (for one sample of a batch when `sample` is
+/// given, for the sample at hand when streaming).
+pub fn non_finite_prediction(kind: &str, sample: Option<usize>, y: f64) -> crate::Error {
+    let which = sample.map_or(String::new(), |i| format!(" for sample {i}"));
+    crate::Error::Numerical(format!(
+        "{kind} model: the prediction{which} is not a finite number ({y}): \
+         the model's numbers overflow on this input"
+    ))
+}
+
 /// An owned row-major matrix, serialised as `{"shape": [r, c], "data": [...]}`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(try_from = "RawMatrix")]

@@ -31,6 +31,7 @@ pub fn check_step(temps: &[f64], m: usize, measured_prev: Option<f64>) -> Result
 /// Runs `push(row, measured_prev)` over the rows of `temps` (`m` per row): closed loop, or one
 /// step ahead when `measured` is given (its value k−1 enters at step k).
 pub fn run_series(
+    kind: &str,
     temps: &[f64],
     m: usize,
     measured: Option<&[f64]>,
@@ -53,7 +54,13 @@ pub fn run_series(
     (0..n)
         .map(|k| {
             let prev = measured.filter(|_| k > 0).map(|y| y[k - 1]);
-            push(&temps[k * m..(k + 1) * m], prev)
+            push(&temps[k * m..(k + 1) * m], prev).and_then(|y| {
+                if y.is_finite() {
+                    Ok(y)
+                } else {
+                    Err(crate::samples::non_finite_prediction(kind, Some(k), y))
+                }
+            })
         })
         .collect()
 }

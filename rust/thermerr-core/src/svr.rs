@@ -122,15 +122,19 @@ impl SvrModel {
     pub fn predict(&self, x: Samples<'_>) -> Result<Vec<f64>> {
         check_features(x.ncols(), self.n_features())?;
         x.require_finite("X")?;
+        crate::samples::require_finite_predictions("svr", self.predict_unchecked(x))
+    }
+
+    fn predict_unchecked(&self, x: Samples<'_>) -> Vec<f64> {
         #[cfg(feature = "fit")]
         if x.nrows() * self.dual_coef.len() * x.ncols() >= 1 << 16 {
             use rayon::prelude::*;
-            return Ok((0..x.nrows())
+            return (0..x.nrows())
                 .into_par_iter()
                 .map(|i| self.predict_one(x.row(i)))
-                .collect());
+                .collect();
         }
-        Ok(x.rows().map(|r| self.predict_one(r)).collect())
+        x.rows().map(|r| self.predict_one(r)).collect()
     }
 }
 

@@ -6,12 +6,13 @@
 //! [`thermerr_core::artifact`], built here without its training code: the edge and the Python
 //! library read the same files through the same code and predict through the same `predict_one`,
 //! so they agree by construction. This crate adds the error type the CLI and the C ABI report,
-//! the streaming command-line filter (`main.rs`) and the C ABI ([`capi`]).
+//! the streaming command-line filter (`main.rs`, its line parser in [`filter`]) and the C ABI ([`capi`]).
 //!
 //! Kinds: `mlr`, `rbf`, `svr`, `bp`, `greybp`, `gm1n`, `hybrid`. Call [`Predictor::reset`] at the
 //! start of a new run.
 
 pub mod capi;
+pub mod filter;
 
 use std::path::Path;
 

@@ -11,6 +11,7 @@ use std::io::{BufRead, BufReader, Write};
 use std::process::ExitCode;
 use std::time::Instant;
 
+use thermerr_edge::filter::LineFilter;
 use thermerr_edge::Predictor;
 
 const USAGE: &str = "usage: thermerr-edge MODEL.json [RUN.csv] [--bench-latency N]
@@ -21,65 +22,6 @@ fn fail(msg: impl std::fmt::Display) -> ExitCode {
     ExitCode::from(2)
 }
 
-struct Columns {
-    features: Vec<usize>,
-    time: Option<usize>,
-    width: usize,
-}
-
-fn columns(header: &str, p: &Predictor) -> Result<Columns, String> {
-    let names: Vec<&str> = header
-        .trim_start_matches('\u{feff}')
-        .trim_end_matches(['\r', '\n'])
-        .split(',')
-        .map(str::trim)
-        .collect();
-    let wanted = p
-        .features()
-        .ok_or("the model does not record its feature columns (fit it on a run)")?;
-    let mut missing = Vec::new();
-    let mut features = Vec::with_capacity(wanted.len());
-    for w in wanted {
-        match names.iter().position(|n| n == w) {
-            Some(k) => features.push(k),
-            None => missing.push(w.as_str()),
-        }
-    }
-    if !missing.is_empty() {
-        return Err(format!(
-            "the input has no column {} (columns are: {})",
-            missing.join(", "),
-            names.join(", ")
-        ));
-    }
-    Ok(Columns {
-        features,
-        time: names.iter().position(|n| *n == "time_s"),
-        width: names.len(),
-    })
-}
-
-/// Parses the model's features of one data line into `x`; the time field as written.
-fn parse_row<'l>(
-    line: &'l str,
-    cols: &Columns,
-    names: &[String],
-    x: &mut [f64],
-) -> Result<Option<&'l str>, String> {
-    let f: Vec<&str> = line.split(',').collect();
-    if f.len() != cols.width {
-        return Err(format!("expected {} fields, got {}", cols.width, f.len()));
-    }
-    for ((xv, &k), name) in x.iter_mut().zip(&cols.features).zip(names) {
-        let raw = f[k].trim();
-        match raw.parse::<f64>() {
-            Ok(v) if v.is_finite() => *xv = v,
-            _ => return Err(format!("column `{name}`: not a finite number ({raw:?})")),
-        }
-    }
-    Ok(cols.time.map(|k| f[k].trim()))
-}
-
 fn run(p: &mut Predictor, input: Box<dyn BufRead>, bench: Option<usize>) -> ExitCode {
     let mut lines = input.lines();
     let header = match lines.next() {
@@ -87,18 +29,16 @@ fn run(p: &mut Predictor, input: Box<dyn BufRead>, bench: Option<usize>) -> Exit
         Some(Err(e)) => return fail(format!("cannot read the header: {e}")),
         None => return fail("the input is empty (a header row is expected)"),
     };
-    let cols = match columns(&header, p) {
-        Ok(c) => c,
+    let mut filter = match LineFilter::new(&header, p) {
+        Ok(f) => f,
         Err(e) => return fail(e),
     };
-    let names: Vec<String> = p.features().map(<[String]>::to_vec).unwrap_or_default();
     let target = p.target().unwrap_or("E").to_string();
-    let mut x = vec![0.0; p.n_features()];
     if let Some(n) = bench {
         let mut rows = Vec::new();
         for line in lines.map_while(Result::ok) {
-            if parse_row(&line, &cols, &names, &mut x).is_ok() {
-                rows.push(x.clone());
+            if let Ok((x, _)) = filter.parse_row(line.trim_end_matches('\r')) {
+                rows.push(x.to_vec());
             }
         }
         return latency(p, &rows, n);
@@ -108,7 +48,7 @@ fn run(p: &mut Predictor, input: Box<dyn BufRead>, bench: Option<usize>) -> Exit
     if writeln!(out, "time_s,{target}_pred").is_err() {
         return ExitCode::SUCCESS; // the reader went away
     }
-    let mut row = 0usize;
+    let mut accepted = 0usize;
     let mut rejected = 0usize;
     for (k, line) in lines.enumerate() {
         let lineno = k + 2;
@@ -120,34 +60,25 @@ fn run(p: &mut Predictor, input: Box<dyn BufRead>, bench: Option<usize>) -> Exit
                 continue;
             }
         };
-        let l = line.trim_end_matches('\r');
-        if l.trim().is_empty() {
-            continue;
-        }
-        match parse_row(l, &cols, &names, &mut x) {
-            Ok(t) => match p.predict_sample(&x) {
-                Ok(y) => {
-                    let ok = match t {
-                        Some(t) => writeln!(out, "{t},{y}"),
-                        None => writeln!(out, "{row},{y}"),
-                    };
-                    if ok.and_then(|_| out.flush()).is_err() {
-                        return ExitCode::SUCCESS;
-                    }
-                    row += 1;
+        match filter.feed(p, &line) {
+            Ok(None) => {}
+            Ok(Some(o)) => {
+                let ok = match o.time {
+                    Some(t) => writeln!(out, "{t},{}", o.y),
+                    None => writeln!(out, "{},{}", o.row, o.y),
+                };
+                if ok.and_then(|_| out.flush()).is_err() {
+                    return ExitCode::SUCCESS;
                 }
-                Err(e) => {
-                    eprintln!("thermerr-edge: line {lineno}: {e}; skipped");
-                    rejected += 1;
-                }
-            },
+                accepted += 1;
+            }
             Err(e) => {
                 eprintln!("thermerr-edge: line {lineno}: {e}; skipped");
                 rejected += 1;
             }
         }
     }
-    if row == 0 && rejected > 0 {
+    if accepted == 0 && rejected > 0 {
         // nothing came out: the input does not fit the model, which is not a success
         return fail(format!(
             "every data row ({rejected}) was rejected: no compensation was computed"

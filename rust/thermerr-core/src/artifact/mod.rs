@@ -152,7 +152,8 @@ impl Preprocessing {
         }
     }
 
-    /// Checks the ranges against the model's feature count.
+    /// Checks the ranges against the model's feature count: each a finite, ordered range whose
+    /// width is finite too (1e308 to -1e308 would scale every reading to 0 or overflow).
     pub fn validate(&self, n_features: usize) -> Result<()> {
         let (lo, hi) = self.ranges();
         if lo.len() != n_features || hi.len() != n_features {
@@ -162,16 +163,14 @@ impl Preprocessing {
                 hi.len()
             )));
         }
-        if let Some(j) =
-            (0..n_features).find(|&j| !(lo[j].is_finite() && hi[j].is_finite()) || hi[j] < lo[j])
-        {
+        if let Some(j) = (0..n_features).find(|&j| !(hi[j] - lo[j]).is_finite() || hi[j] < lo[j]) {
             return Err(format_err(format!(
                 "preprocessing range of feature {j} is not a finite, ordered range ({} to {})",
                 lo[j], hi[j]
             )));
         }
         if let Preprocessing::MinmaxAgo { y_min, y_max, .. } = self {
-            if !(y_min.is_finite() && y_max.is_finite()) || y_max < y_min {
+            if !(y_max - y_min).is_finite() || y_max < y_min {
                 return Err(format_err(format!(
                     "preprocessing target range is not a finite, ordered range ({y_min} to {y_max})"
                 )));

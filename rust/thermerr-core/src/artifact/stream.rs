@@ -52,6 +52,17 @@ fn predict_model(
     })
 }
 
+/// A prediction that is a finite number, or the error naming the model (no allocation on
+/// success).
+#[inline]
+fn finite(kind: &str, y: f64) -> Result<f64> {
+    if y.is_finite() {
+        Ok(y)
+    } else {
+        Err(crate::samples::non_finite_prediction(kind, None, y))
+    }
+}
+
 /// A validated model file with its per-run state (inputs as rises, 1-AGO accumulation, the
 /// grey and filter models' past outputs), in buffers sized when it is built.
 #[derive(Clone, Debug)]
@@ -165,8 +176,10 @@ impl Predictor {
             *b = if rise { x[j] - self.first[j] } else { x[j] };
         }
         let (model, state) = (&self.artifact.model, &mut self.state);
+        let kind = model.kind();
         let Some(pre) = &self.artifact.header.preprocessing else {
-            return predict_model(model, state, &self.buf, measured_prev);
+            let y = predict_model(model, state, &self.buf, measured_prev)?;
+            return finite(kind, y);
         };
         pre.scale_row(&mut self.buf);
         if pre.accumulates() {
@@ -178,6 +191,6 @@ impl Predictor {
         let y1 = predict_model(model, state, &self.buf, measured_prev)?;
         let y = pre.output(y1, self.y1_prev);
         self.y1_prev = y1;
-        Ok(y)
+        finite(kind, y)
     }
 }

@@ -236,3 +236,71 @@ fn mutated_model_files_never_panic() {
         "only {n_loaded} of {n_files} mutated files loaded"
     );
 }
+
+/// Found by `tests/test_properties.py` (mutated model files): a file whose coefficients are
+/// finite but near the f64 limit loaded, and predicted `inf` for every sample, with no error.
+/// Every family's batch predict and the streaming predictor refuse a non-finite prediction.
+#[test]
+fn a_prediction_that_overflows_is_an_error_not_inf() {
+    let mut v: Value = serde_json::from_str(&fixture("mlr_rise")).unwrap();
+    v["model"]["coef"] = json!([1e308, 1e308, 0.0, 0.0]);
+    v["inputs"] = json!("absolute");
+    let a = Artifact::from_json(&v.to_string()).unwrap();
+    let x = [10.0, 10.0, 0.0, 0.0];
+    let Model::Mlr(m) = &a.model else {
+        unreachable!()
+    };
+    let e = m
+        .predict(crate::Samples::new(&x, 1, 4).unwrap())
+        .unwrap_err();
+    assert!(matches!(e, Error::Numerical(_)), "{e:?}");
+    let msg = e.to_string();
+    assert!(
+        msg.contains("mlr model") && msg.contains("sample 0") && msg.contains("not a finite"),
+        "{msg}"
+    );
+    let mut p = Predictor::new(a);
+    let e = p.predict_sample(&x).unwrap_err().to_string();
+    assert!(e.contains("mlr model") && e.contains("not a finite"), "{e}");
+    // the same file on small inputs predicts as before
+    assert_eq!(p.predict_sample(&[0.0; 4]).unwrap(), -0.551132886101243);
+
+    // kernel models: weights at the limit overflow once several kernels add up
+    for name in ["svr_rise", "rbf_ols_minmax_rise"] {
+        let mut v: Value = serde_json::from_str(&fixture(name)).unwrap();
+        let field = if name.starts_with("svr") {
+            "dual_coef"
+        } else {
+            "weights"
+        };
+        let w = v["model"][field].as_array().unwrap().len();
+        v["model"][field] = json!(vec![1.7e308; w]);
+        let mut p = Predictor::new(Artifact::from_json(&v.to_string()).unwrap());
+        let mut err = None;
+        for k in 0..50 {
+            let x = vec![20.0 + k as f64 * 0.1; p.n_features()];
+            match p.predict_sample(&x) {
+                Ok(y) => assert!(y.is_finite(), "{name}: {y}"),
+                Err(e) => err = Some(e.to_string()),
+            }
+        }
+        let e = err.unwrap_or_else(|| panic!("{name}: never overflowed"));
+        assert!(e.contains("not a finite"), "{name}: {e}");
+    }
+}
+
+/// A preprocessing range whose ends are finite but whose width is not (-1e308 to 1e308) is
+/// refused at load: it scaled every reading to 0, and its target range overflowed the IAGO.
+#[test]
+fn a_range_of_infinite_width_is_refused() {
+    let mut v: Value = serde_json::from_str(&fixture("rbf_exact_ago")).unwrap();
+    v["preprocessing"]["x_min"][0] = json!(-1e308);
+    v["preprocessing"]["x_max"][0] = json!(1e308);
+    let e = Artifact::from_json(&v.to_string()).unwrap_err().to_string();
+    assert!(e.contains("range of feature 0"), "{e}");
+    let mut v: Value = serde_json::from_str(&fixture("rbf_exact_ago")).unwrap();
+    v["preprocessing"]["y_min"] = json!(-1e308);
+    v["preprocessing"]["y_max"] = json!(1e308);
+    let e = Artifact::from_json(&v.to_string()).unwrap_err().to_string();
+    assert!(e.contains("target range"), "{e}");
+}

@@ -1,0 +1,97 @@
+//! The streaming command-line filter's line parser: a CSV header picks the model's feature
+//! columns by name, then each data line becomes one sample. The CLI (`main.rs`) and the fuzz
+//! target `edge_stream` run lines through this one code path.
+
+use crate::Predictor;
+
+/// Where the model's features and the time are in the lines of one input.
+#[derive(Clone, Debug)]
+pub struct LineFilter {
+    features: Vec<usize>,
+    names: Vec<String>,
+    time: Option<usize>,
+    width: usize,
+    x: Vec<f64>,
+    row: usize,
+}
+
+/// One prediction written by the filter: the line's time field as written (or, without a
+/// `time_s` column, the count of rows predicted before it) and the predicted error.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Output<'l> {
+    pub time: Option<&'l str>,
+    pub row: usize,
+    pub y: f64,
+}
+
+impl LineFilter {
+    /// Reads the header line: every feature the model reads must be a column of it.
+    pub fn new(header: &str, p: &Predictor) -> Result<Self, String> {
+        let names: Vec<&str> = header
+            .trim_start_matches('\u{feff}')
+            .trim_end_matches(['\r', '\n'])
+            .split(',')
+            .map(str::trim)
+            .collect();
+        let wanted = p
+            .features()
+            .ok_or("the model does not record its feature columns (fit it on a run)")?;
+        let mut missing = Vec::new();
+        let mut features = Vec::with_capacity(wanted.len());
+        for w in wanted {
+            match names.iter().position(|n| n == w) {
+                Some(k) => features.push(k),
+                None => missing.push(w.as_str()),
+            }
+        }
+        if !missing.is_empty() {
+            return Err(format!(
+                "the input has no column {} (columns are: {})",
+                missing.join(", "),
+                names.join(", ")
+            ));
+        }
+        Ok(LineFilter {
+            features,
+            names: wanted.to_vec(),
+            time: names.iter().position(|n| *n == "time_s"),
+            width: names.len(),
+            x: vec![0.0; p.n_features()],
+            row: 0,
+        })
+    }
+
+    /// Parses the model's features of one data line; returns them and the time field as written.
+    pub fn parse_row<'l>(&mut self, line: &'l str) -> Result<(&[f64], Option<&'l str>), String> {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != self.width {
+            return Err(format!("expected {} fields, got {}", self.width, f.len()));
+        }
+        for ((xv, &k), name) in self.x.iter_mut().zip(&self.features).zip(&self.names) {
+            let raw = f[k].trim();
+            match raw.parse::<f64>() {
+                Ok(v) if v.is_finite() => *xv = v,
+                _ => return Err(format!("column `{name}`: not a finite number ({raw:?})")),
+            }
+        }
+        Ok((&self.x, self.time.map(|k| f[k].trim())))
+    }
+
+    /// One data line through the model: `Ok(None)` for a blank line, the prediction for a good
+    /// one, the reason for a bad one (the caller reports it with the line number and goes on).
+    pub fn feed<'l>(
+        &mut self,
+        p: &mut Predictor,
+        line: &'l str,
+    ) -> Result<Option<Output<'l>>, String> {
+        let l = line.trim_end_matches(['\r', '\n']);
+        if l.trim().is_empty() {
+            return Ok(None);
+        }
+        let (x, time) = self.parse_row(l)?;
+        let y = p.predict_sample(x).map_err(|e| e.to_string())?;
+        let row = self.row;
+        self.row += 1;
+        Ok(Some(Output { time, row, y }))
+    }
+}
