@@ -100,6 +100,8 @@ def csv_texts(draw: Any) -> tuple[str, list[str], list[list[tuple[str, float | N
         if draw(st.integers(0, 9)) == 0:
             lines.append("")  # empty lines are skipped
         lines.append(",".join(text for text, _ in row))
+    # a row of one empty cell is an empty line, which is no row at all
+    rows = [row for row in rows if ",".join(text for text, _ in row) != ""]
     return "\n".join(lines) + draw(st.sampled_from(["", "\n", "\r\n"])), names, rows
 
 
@@ -164,7 +166,7 @@ def test_read_run_reads_every_good_file(cols: list[str], steps: list[float], dat
     """A well-formed file is always read, to the exact numbers written."""
     t = np.cumsum(steps)
     values = data.draw(hnp.arrays(np.float64, (len(t), len(cols)),
-                                  elements=st.floats(allow_nan=False, allow_infinity=False)))
+                                  elements=st.floats(min_value=-1e12, max_value=1e12)))  # MAX_ABS_VALUE
     lines = [",".join(["time_s", *cols])]
     for i in range(len(t)):
         lines.append(",".join([repr(float(t[i]))] + [repr(float(v)) for v in values[i]]))
@@ -426,12 +428,19 @@ def test_svr_does_not_depend_on_row_order(data: Any, rnd: Any, kernel: str) -> N
     perm = np.array(rnd.sample(range(len(x)), len(x)))
     params = dict(C=10.0, epsilon=0.1, kernel=kernel, gamma=0.01, tol=1e-12, shrinking=False, max_iter=10**6)
     try:
-        p = tr.SVR(**params).fit(x, y).predict(x)
-        q = tr.SVR(**params).fit(x[perm], y[perm]).predict(x)
+        a = tr.SVR(**params).fit(x, y)
+        b = tr.SVR(**params).fit(x[perm], y[perm])
     except tr.ConvergenceError:
         assume(False)
         return
-    _close(q, p, float(np.max(np.abs(y))))
+    # w is unique, the intercept only when some support vector is clearly free (1e-6 C < |alpha| <
+    # (1 - 1e-6) C; an alpha a hair off its bound is a kink the solver only approaches): with
+    # every alpha at a bound the optimal intercepts form an interval and SMO returns its middle,
+    # which depends on the path (found by this test: four rows with x = 0, a linear kernel)
+    for m in (a, b):
+        coef = np.abs(np.asarray(m.dual_coef_)).ravel()
+        assume(bool(np.any((coef > 1e-6 * params["C"]) & (coef < (1 - 1e-6) * params["C"]))))
+    _close(b.predict(x), a.predict(x), float(np.max(np.abs(y))))
 
 
 @FAST

@@ -310,3 +310,16 @@ def test_the_edge_fails_when_every_row_was_rejected(edge_bin, example_run1, tmp_
     good = "time_s,T_s01,T_s07\n0,x,1\n15,20,21\n"  # one bad row among good ones is skipped
     r = subprocess.run([str(edge_bin), str(model)], input=good, capture_output=True, text=True)
     assert r.returncode == 0 and r.stdout.count("\n") == 2, (r.stdout, r.stderr)
+
+
+def test_a_semicolon_file_reads_with_delimiter_and_says_so_without(example_run1, tmp_path):
+    semi = tmp_path / "semi.csv"
+    semi.write_text(example_run1.read_text().replace(",", ";"))
+    r = _cli("evaluate", "--help")
+    assert "--delimiter" in r.stdout
+    r = _cli("select-sensors", str(semi), "--axis", "E_z", "--json")
+    assert r.returncode == 2 and "';'" in r.stderr and "semi.csv" in r.stderr, r.stderr
+    r = _cli("select-sensors", str(semi), "--axis", "E_z", "--json", "--delimiter", ";")
+    assert r.returncode == 0, r.stderr
+    same = _cli("select-sensors", str(example_run1), "--axis", "E_z", "--json")
+    assert json.loads(r.stdout) == json.loads(same.stdout)

@@ -65,6 +65,15 @@ def _print_json(obj: Any) -> None:
     print(json.dumps(_finite(obj), indent=1, allow_nan=False))
 
 
+def _read(args: argparse.Namespace, path: str) -> Run:
+    return read_run(path, nan=args.nan, delimiter=args.delimiter)
+
+
+def _delimiter(text: str) -> str:
+    named = {"tab": "\t", "\\t": "\t", "comma": ",", "semicolon": ";"}
+    return named.get(text, text)
+
+
 def _positive_int(text: str) -> int:
     try:
         v = int(text)
@@ -169,7 +178,7 @@ def _print_scores(args: argparse.Namespace, title: str, s: Scores) -> None:
 
 def cmd_fit(args: argparse.Namespace) -> int:
     _check_out(args.out, args.run, args.test)
-    run = read_run(args.run, nan=args.nan)
+    run = _read(args, args.run)
     run[args.axis]
     sensors = _sensors(args, run)
     run.check_fit_columns(args.axis, sensors)
@@ -185,7 +194,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     report["train"] = train.as_dict()
     _print_scores(args, "training run", train)
     if args.test:
-        test_run = read_run(args.test, nan=args.nan)
+        test_run = _read(args, args.test)
         held = scores(test_run[args.axis], model.predict_run(test_run))
         report["test"] = held.as_dict()
         _print_scores(args, f"held-out run {test_run.source}", held)
@@ -200,7 +209,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
     model = load_model(args.model)
-    run = read_run(args.run, nan=args.nan)
+    run = _read(args, args.run)
     target = args.axis or model.target_name_
     if not target:
         raise ThermerrError(f"{args.model} does not record its target axis: pass --axis")
@@ -219,7 +228,7 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
 def cmd_select(args: argparse.Namespace) -> int:
     from .selection import select_sensors
 
-    run = read_run(args.run, nan=args.nan)
+    run = _read(args, args.run)
     axes = [a.strip() for a in args.axis.split(",") if a.strip()]
     sel = select_sensors(run, axes[0] if len(axes) == 1 else axes, n_clusters=args.n_clusters, seed=args.seed)
     if args.json:
@@ -235,7 +244,7 @@ def cmd_predict(args: argparse.Namespace) -> int:
 
     _check_out(args.out, args.run, args.machine)
     machine = Machine.load(args.machine)
-    run = read_run(args.run, nan=args.nan)
+    run = _read(args, args.run)
     sim = machine.simulate(run, fit_initial=args.fit_initial)
     cols = {"time_s": run.time_s}
     cols.update({f"{a}_pred": v for a, v in sim.drift.items()})
@@ -257,7 +266,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
     _check_out(args.out, args.run, args.machine)
     machine = Machine.load(args.machine)
-    run = read_run(args.run, nan=args.nan)
+    run = _read(args, args.run)
     _stage(args, f"calibrating {args.machine} on {run.source} ...")
     cal, info = machine.calibrate(run, args.axis)
     cal.save(args.out)
@@ -276,8 +285,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         if given and os.path.realpath(os.path.dirname(os.path.abspath(given))) == os.path.realpath(args.out):
             raise ThermerrError(f"--out {args.out} holds the input {given}: choose another directory")
     machine = Machine.load(args.machine)
-    run = read_run(args.run, nan=args.nan)
-    hold = read_run(args.holdout, nan=args.nan) if args.holdout else None
+    run = _read(args, args.run)
+    hold = _read(args, args.holdout) if args.holdout else None
     _stage(args, f"diagnosing {args.machine} on {run.source}: calibrating the baseline and every "
                  "candidate extension ...")
     d = diagnose(run, machine, hold, axis=args.axis)
@@ -294,7 +303,7 @@ def cmd_stiffness(args: argparse.Namespace) -> int:
     from .stiffness import key_thermal_stiffness
 
     model = load_model(args.model)
-    run = read_run(args.run, nan=args.nan)
+    run = _read(args, args.run)
     res = key_thermal_stiffness(model, run, at=args.at, eta=args.eta, target=args.axis)
     if args.json:
         _print_json(res.to_dict())
@@ -359,6 +368,8 @@ def build_parser() -> argparse.ArgumentParser:
     def common(sp: argparse.ArgumentParser) -> None:
         sp.add_argument("--nan", choices=["error", "drop", "interpolate"], default="error",
                         help="what to do with missing values in the run (default: error)")
+        sp.add_argument("--delimiter", type=_delimiter, default=",",
+                        help="field separator of the run CSVs: ',' (default), ';', 'tab', ...")
         sp.add_argument("--quiet", action="store_true", help="no progress or chatter (the results are still printed; --json prints only them)")
         sp.add_argument("--json", action="store_true", help="print results as JSON")
 

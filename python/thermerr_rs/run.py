@@ -145,12 +145,14 @@ class Run:
         )
 
 
-def read_run(path: str | os.PathLike[str], nan: NanPolicy = "error") -> Run:
+def read_run(path: str | os.PathLike[str], nan: NanPolicy = "error", *, delimiter: str = ",") -> Run:
     """Read and validate a run CSV (formats.md, "Measured run").
 
     ``nan``: ``"error"`` (default) refuses a missing value, naming its row and column;
     ``"drop"`` drops rows with any missing value; ``"interpolate"`` fills gaps linearly in time.
     Every refusal names the file, and the row and column where there is one. Columns without a
-    ``T_``/``E_``/``U_`` prefix are ignored with a warning.
+    ``T_``/``E_``/``U_`` prefix are ignored with a warning. ``delimiter``: the field separator
+    (``";"`` for files from a spreadsheet set to a decimal comma's locale, ``"\t"``, ...); a
+    header that looks separated by another one says so.
     """
-    return Run(_core.read_run(os.fspath(path), nan))
+    return Run(_core.read_run(os.fspath(path), nan, delimiter))

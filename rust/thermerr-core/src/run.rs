@@ -62,19 +62,34 @@ impl Run {
     /// Reads a CSV file. Every refusal names the file, and the row/line and column where there is
     /// one.
     pub fn read_csv(path: &Path, nan: NanPolicy) -> Result<Run> {
+        Run::read_csv_with(path, nan, b',')
+    }
+
+    /// [`Run::read_csv`] with another field delimiter (`b';'`, `b'\t'`, ...).
+    pub fn read_csv_with(path: &Path, nan: NanPolicy, delimiter: u8) -> Result<Run> {
         let file = std::fs::File::open(path).map_err(|source| Error::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        Run::from_csv_reader(file, &path.display().to_string(), nan)
+        Run::from_csv_reader_with(file, &path.display().to_string(), nan, delimiter)
     }
 
     /// Reads CSV text from any reader (a file, stdin, bytes in memory): the one parser behind
     /// [`Run::read_csv`]. `source` names the data in every refusal, as the path does for a file.
     pub fn from_csv_reader<R: std::io::Read>(
+        reader: R,
+        source: &str,
+        nan: NanPolicy,
+    ) -> Result<Run> {
+        Run::from_csv_reader_with(reader, source, nan, b',')
+    }
+
+    /// [`Run::from_csv_reader`] with another field delimiter.
+    pub fn from_csv_reader_with<R: std::io::Read>(
         mut reader: R,
         source: &str,
         nan: NanPolicy,
+        delimiter: u8,
     ) -> Result<Run> {
         let file = source.to_string();
         let mut bytes = Vec::new();
@@ -85,10 +100,30 @@ impl Run {
         let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(&bytes);
         let mut rdr = csv::ReaderBuilder::new()
             .has_headers(true)
+            .delimiter(delimiter)
             .trim(csv::Trim::All)
             .from_reader(bytes);
         let header = rdr.headers().map_err(|e| csv_error(&file, e))?.clone();
         let names: Vec<String> = header.iter().map(str::to_string).collect();
+        if let [only] = names.as_slice() {
+            // one column whose name holds another delimiter: say so before "no time_s column"
+            if let Some(d) = [b',', b';', b'\t', b'|']
+                .into_iter()
+                .find(|&d| d != delimiter && only.as_bytes().contains(&d))
+            {
+                return Err(Error::Parse {
+                    file,
+                    line: Some(1),
+                    row: None,
+                    column: None,
+                    reason: format!(
+                        "the header is one column, {only:?}: are the fields separated by {:?}? \
+                         (delimiter: {:?})",
+                        d as char, delimiter as char
+                    ),
+                });
+            }
+        }
         let parsed: Vec<bool> = names
             .iter()
             .map(|s| s == "time_s" || is_data_column(s))
@@ -530,6 +565,17 @@ mod tests {
             NanPolicy::Interpolate,
         );
         assert!(e.contains("row 1") && e.contains("T_a"), "{e}");
+    }
+
+    #[test]
+    fn reads_other_delimiters_and_says_which_one_is_likely() {
+        let text = b"time_s;T_a;E_z\n0;20;0\n15;21;1.5\n";
+        let r = Run::from_csv_reader_with(&text[..], "semi.csv", NanPolicy::Error, b';').unwrap();
+        assert_eq!(r.column("E_z").unwrap(), &[0.0, 1.5]);
+        let e = Run::from_csv_reader(&text[..], "semi.csv", NanPolicy::Error)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("semi.csv") && e.contains("';'"), "{e}");
     }
 
     #[test]

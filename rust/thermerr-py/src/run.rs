@@ -31,10 +31,27 @@ fn run_to_dict<'py>(py: Python<'py>, run: Run) -> PyResult<Bound<'py, PyDict>> {
 
 /// Reads and validates a run CSV; returns its pieces as a dict (the Python `Run` wraps it).
 #[pyfunction]
-#[pyo3(signature = (path, nan = "error"))]
-fn read_run<'py>(py: Python<'py>, path: PathBuf, nan: &str) -> PyResult<Bound<'py, PyDict>> {
+#[pyo3(signature = (path, nan = "error", delimiter = ","))]
+fn read_run<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    nan: &str,
+    delimiter: &str,
+) -> PyResult<Bound<'py, PyDict>> {
     let policy: NanPolicy = nan.parse().map_err(PyErrWrap)?;
-    let run = crate::detach(py, || Run::read_csv(&path, policy))?;
+    let d = match delimiter.as_bytes() {
+        [b] if b.is_ascii() && *b != b'"' && *b != b'\n' && *b != b'\r' => *b,
+        _ => {
+            return Err(PyErrWrap(thermerr_core::Error::InvalidParam {
+                name: "delimiter",
+                reason: format!(
+                    "must be one ASCII character (not a quote or newline), got {delimiter:?}"
+                ),
+            })
+            .into())
+        }
+    };
+    let run = crate::detach(py, || Run::read_csv_with(&path, policy, d))?;
     run_to_dict(py, run)
 }
 
