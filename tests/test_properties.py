@@ -425,6 +425,10 @@ def test_mlr_does_not_depend_on_row_order(data: Any, rnd: Any) -> None:
 @given(xy(), st.randoms(use_true_random=False), st.sampled_from(["rbf", "linear"]))
 def test_svr_does_not_depend_on_row_order(data: Any, rnd: Any, kernel: str) -> None:
     x, y = data
+    # ties (repeated rows, repeated targets) make the dual degenerate: many optima, and which one
+    # SMO stops at depends on the order it visits them (found by this test); the property is about
+    # the generic problem, whose optimum is unique
+    assume(len(np.unique(x, axis=0)) == len(x) and len(np.unique(y)) == len(y))
     perm = np.array(rnd.sample(range(len(x)), len(x)))
     params = dict(C=10.0, epsilon=0.1, kernel=kernel, gamma=0.01, tol=1e-12, shrinking=False, max_iter=10**6)
     try:
