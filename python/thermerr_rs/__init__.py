@@ -30,6 +30,7 @@ from .preprocessing import AGORegressor, MinMaxAGO, MinMaxScaled, spread_search
 from .rbf import RBFNetwork
 from .run import Run, read_run
 from .selection import SensorSelection, select_sensors
+from .shaping import shape_offsets
 from .stiffness import StiffnessResult, key_thermal_stiffness
 from .svr import SVR
 from .swarm import SwarmResult, TuneResult, cso, pso, svr_cv_mse, tune_svr
@@ -48,6 +49,7 @@ __all__ = [
     "read_run",
     "Scores",
     "scores",
+    "shape_offsets",
     "MLR",
     "FuzzyCMeans",
     "SensorSelection",

@@ -133,9 +133,18 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         return self._fit_checked(run.input_matrix(features, inputs), run[target], names=list(features),
                                  target=target, inputs=inputs)
 
-    def predict_run(self, run: Any) -> F64:
-        """Predict a run from the columns (and input form) the model was fitted on."""
-        return self._predict_columns(self._run_matrix(run))
+    def predict_run(self, run: Any, *, shape: Any = None) -> F64:
+        """Predict a run from the columns (and input form) the model was fitted on.
+
+        ``shape`` (e.g. ``"limit=50,rate=2,unit=0.1"``): return the offsets a CNC would be sent
+        instead of the raw predictions (:func:`thermerr_rs.shape_offsets`, the same code as
+        ``thermerr-edge --shape``)."""
+        y = self._predict_columns(self._run_matrix(run))
+        if shape is None:
+            return y
+        from .shaping import shape_offsets
+
+        return shape_offsets(run.time_s, y, shape)
 
     def _run_matrix(self, run: Any) -> F64:
         self._check_fitted()

@@ -38,14 +38,21 @@ class _Sequential(SequenceModel):
         out: F64 = self._inner.predict(x, y)
         return out
 
-    def predict_run(self, run: Any, *, one_step: bool = False) -> F64:  # type: ignore[override]
-        """Predict a run closed loop, or one step ahead from its measured target column."""
+    def predict_run(self, run: Any, *, one_step: bool = False, shape: Any = None) -> F64:
+        """Predict a run closed loop, or one step ahead from its measured target column;
+        ``shape`` as in :meth:`Estimator.predict_run`."""
         x = self._run_matrix(run)
         if one_step:
             if not self.target_name_:
                 raise ModelFormatError("this model does not record its target column")
-            return self._predict_columns(x, run[self.target_name_])
-        return self._predict_columns(x)
+            y = self._predict_columns(x, run[self.target_name_])
+        else:
+            y = self._predict_columns(x)
+        if shape is None:
+            return y
+        from .shaping import shape_offsets
+
+        return shape_offsets(run.time_s, y, shape)
 
 
     @property

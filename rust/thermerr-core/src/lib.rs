@@ -29,6 +29,7 @@ pub mod rbf;
 pub mod run;
 pub mod samples;
 pub mod sequence;
+pub mod shape;
 pub mod svr;
 #[cfg(feature = "fit")]
 pub mod swarm;

@@ -4,6 +4,10 @@
 //! skipped. The model's feature columns are picked by name; other columns are ignored. Exit
 //! status 2 for bad usage, a bad model or header, or when every data row was rejected.
 //!
+//! `--shape SPEC` (e.g. `limit=50,rate=2,deadband=0.5,unit=0.1,bits=16`) adds a third column,
+//! `<target>_offset`: the prediction shaped into what the CNC accepts (clamped, dead band, rate
+//! limited per second of `time_s` — per row without it — and quantised; `thermerr_core::shape`).
+//!
 //! `--bench-latency N` times N predictions over the run's rows (cycling, with a reset at each
 //! pass) and prints per-sample latency percentiles and the peak resident memory as JSON.
 
@@ -11,18 +15,26 @@ use std::io::{BufRead, BufReader, Write};
 use std::process::ExitCode;
 use std::time::Instant;
 
+use thermerr_core::shape::{Shaper, Shaping};
 use thermerr_edge::filter::LineFilter;
 use thermerr_edge::Predictor;
 
-const USAGE: &str = "usage: thermerr-edge MODEL.json [RUN.csv] [--bench-latency N]
-  Reads CSV rows (header first) from RUN.csv or stdin, writes time_s,<target>_pred per row.";
+const USAGE: &str = "usage: thermerr-edge MODEL.json [RUN.csv] [--shape SPEC] [--bench-latency N]
+  Reads CSV rows (header first) from RUN.csv or stdin, writes time_s,<target>_pred per row.
+  --shape limit=50,rate=2,deadband=0.5,unit=0.1,bits=16 adds <target>_offset, the prediction
+  clamped (um), held within a dead band (um), rate-limited (um/s) and quantised (um, register bits).";
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
     eprintln!("thermerr-edge: error: {msg}");
     ExitCode::from(2)
 }
 
-fn run(p: &mut Predictor, input: Box<dyn BufRead>, bench: Option<usize>) -> ExitCode {
+fn run(
+    p: &mut Predictor,
+    input: Box<dyn BufRead>,
+    bench: Option<usize>,
+    mut shaper: Option<Shaper>,
+) -> ExitCode {
     let mut lines = input.lines();
     let header = match lines.next() {
         Some(Ok(h)) => h,
@@ -45,7 +57,11 @@ fn run(p: &mut Predictor, input: Box<dyn BufRead>, bench: Option<usize>) -> Exit
     }
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
-    if writeln!(out, "time_s,{target}_pred").is_err() {
+    let header = match shaper {
+        Some(_) => format!("time_s,{target}_pred,{target}_offset"),
+        None => format!("time_s,{target}_pred"),
+    };
+    if writeln!(out, "{header}").is_err() {
         return ExitCode::SUCCESS; // the reader went away
     }
     let mut accepted = 0usize;
@@ -63,9 +79,20 @@ fn run(p: &mut Predictor, input: Box<dyn BufRead>, bench: Option<usize>) -> Exit
         match filter.feed(p, &line) {
             Ok(None) => {}
             Ok(Some(o)) => {
-                let ok = match o.time {
-                    Some(t) => writeln!(out, "{t},{}", o.y),
-                    None => writeln!(out, "{},{}", o.row, o.y),
+                let ok = match (o.time, shaper.as_mut()) {
+                    (Some(t), None) => writeln!(out, "{t},{}", o.y),
+                    (None, None) => writeln!(out, "{},{}", o.row, o.y),
+                    (time, Some(s)) => {
+                        // the rate limit is per second of time_s, per row without it
+                        let at = time
+                            .and_then(|t| t.parse::<f64>().ok())
+                            .unwrap_or(o.row as f64);
+                        let offset = s.apply(at, o.y);
+                        match time {
+                            Some(t) => writeln!(out, "{t},{},{offset}", o.y),
+                            None => writeln!(out, "{},{},{offset}", o.row, o.y),
+                        }
+                    }
                 };
                 if ok.and_then(|_| out.flush()).is_err() {
                     return ExitCode::SUCCESS;
@@ -136,6 +163,18 @@ fn main() -> ExitCode {
         }
         args.drain(k..k + 2);
     }
+    let mut shaper = None;
+    if let Some(k) = args.iter().position(|a| a == "--shape") {
+        let spec = match args.get(k + 1) {
+            Some(v) => v.clone(),
+            None => return fail("--shape takes settings, e.g. limit=50,rate=2,unit=0.1"),
+        };
+        match Shaping::parse(&spec).and_then(Shaper::new) {
+            Ok(s) => shaper = Some(s),
+            Err(e) => return fail(format!("--shape {spec}: {e}")),
+        }
+        args.drain(k..k + 2);
+    }
     if args.iter().any(|a| a == "-h" || a == "--help") {
         println!("{USAGE}");
         return ExitCode::SUCCESS;
@@ -155,5 +194,5 @@ fn main() -> ExitCode {
         },
         None => Box::new(BufReader::new(std::io::stdin())),
     };
-    run(&mut p, input, bench)
+    run(&mut p, input, bench, shaper)
 }

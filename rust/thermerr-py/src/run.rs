@@ -75,6 +75,24 @@ fn run_from_columns<'py>(
     run_to_dict(py, run)
 }
 
+/// Predictions shaped into CNC offsets (`thermerr_core::shape`), from a fresh state: `spec` in
+/// the text form `limit=50,rate=2,deadband=0.5,unit=0.1,bits=16`.
+#[pyfunction]
+fn shape_series<'py>(
+    py: Python<'py>,
+    spec: &str,
+    time: PyReadonlyArray1<'py, f64>,
+    y: PyReadonlyArray1<'py, f64>,
+) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
+    let mut shaper = thermerr_core::shape::Shaping::parse(spec)
+        .and_then(thermerr_core::shape::Shaper::new)
+        .map_err(PyErrWrap)?;
+    let out = shaper
+        .apply_series(slice1(&time)?, slice1(&y)?)
+        .map_err(PyErrWrap)?;
+    Ok(vec_to_py(py, out))
+}
+
 /// Figures of merit of `predicted` against `measured`, as a dict.
 #[pyfunction]
 #[pyo3(signature = (measured, predicted, zero_tol = None))]
@@ -105,5 +123,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_run, m)?)?;
     m.add_function(wrap_pyfunction!(run_from_columns, m)?)?;
     m.add_function(wrap_pyfunction!(scores, m)?)?;
+    m.add_function(wrap_pyfunction!(shape_series, m)?)?;
     Ok(())
 }
