@@ -105,7 +105,7 @@ def _run_over_mqtt(broker, procs, tmp_path: Path, edge_bin: Path, model_path: Pa
     tag = uuid.uuid4().hex[:8]
     edge_in = _register(broker, f"edge-in-{tag}", "in")
     collect = _register(broker, f"collect-{tag}", "out")
-    lines = [l for l in run_csv.read_text().splitlines() if l.strip()]
+    lines = [line for line in run_csv.read_text().splitlines() if line.strip()]
     expected = len(lines)  # the edge's header, then one line per row
 
     # the gateway's pipeline; it never sees the end of its input (it runs until killed)
