@@ -188,28 +188,33 @@ def write_run(path: str | os.PathLike[str], n_rows: int, seed: int = 0, *, fault
     grng = np.random.default_rng([seed, 2])
     out: list[Fault] = []
     line = 1
-    held: float | None = None
+    held = 0.0
     stuck_left = 0
     k3 = COLUMNS.index(STUCK_COLUMN)
+    template = "%d," + "%.3f," * len(TEMPS) + "%.0f,%.3f\n"
+    special = set(per_row) | set(inserted) | {n_rows - 1}
     with open(path, "wb") as f:
         f.write(HEADER.encode() + b"\n")
         for t, temps, rpm, e_x in samples(n_rows, seed, chunk):
-            buf: list[bytes] = []
-            for i in range(len(t)):
-                row = int(t[i])
+            buf: list[str] = []
+            values = np.column_stack([t, temps, rpm, e_x]).tolist()
+            for row, v in zip(t.tolist(), values):
+                if row in stuck_at:
+                    stuck_left, held = stuck_at[row], v[k3]
+                    out.append(Fault("stuck", line + 1 + len(inserted.get(row, ())), row, STUCK_COLUMN, stuck_left))
+                if stuck_left > 0:
+                    v[k3] = held  # the same float, so the same text all along the window
+                    stuck_left -= 1
+                if not faults or row not in special:
+                    line += 1
+                    buf.append(template % tuple(v))
+                    continue
                 for kind in inserted.get(row, ()):
                     line += 1
-                    buf.append(_garbage(kind, grng) + b"\n")
+                    buf.append(_garbage(kind, grng).decode("latin-1") + "\n")
                     out.append(Fault(kind, line, None))
                 line += 1
-                fields = [str(row), *(f"{v:.3f}" for v in temps[i]), f"{rpm[i]:.0f}", f"{e_x[i]:.3f}"]
-                if row in stuck_at:
-                    stuck_left, held = stuck_at[row], None
-                    out.append(Fault("stuck", line, row, STUCK_COLUMN, stuck_left))
-                if stuck_left > 0:
-                    held = fields[k3] if held is None else held
-                    fields[k3] = held
-                    stuck_left -= 1
+                fields = (template % tuple(v))[:-1].split(",")
                 fault = per_row.get(row)
                 if fault is not None:
                     kind, col = fault
@@ -224,15 +229,15 @@ def write_run(path: str | os.PathLike[str], n_rows: int, seed: int = 0, *, fault
                             fields.insert(int(grng.integers(1, len(fields))), fields[1])
                     out.append(Fault(kind, line, row, col))
                 text = ",".join(fields)
-                if faults and row == n_rows - 1:
+                if row == n_rows - 1:
                     # cut in the middle of T_4: fewer fields than the header, and no newline
                     cut = text.index(",", len(",".join(fields[:4])) + 1) - 2
-                    buf.append(text[:cut].encode())
+                    buf.append(text[:cut])
                     out.append(Fault("truncated", line, row, "T_4"))
                 else:
-                    buf.append(text.encode() + b"\n")
-            f.write(b"".join(buf))
-    return out
+                    buf.append(text + "\n")
+            f.write("".join(buf).encode("latin-1"))  # latin-1: the garbage bytes go out as they are
+    return sorted(out, key=lambda fl: fl.line)
 
 
 def clean_rows(faults: list[Fault], n_rows: int) -> np.ndarray:
