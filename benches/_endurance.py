@@ -127,14 +127,15 @@ def samples(n_rows: int, seed: int = 0, chunk: int = 8192):
         heat = target + (heat - target) * np.exp(-(stop - start) / _TAU_S)
 
 
-def _fault_plan(n_rows: int, seed: int) -> tuple[dict[int, tuple[str, str | None]], list[tuple[int, int]], dict[int, list[str]]]:
+def _fault_plan(n_rows: int, seed: int) -> tuple[dict[int, tuple[str, str | None]], list[tuple[int, int]],
+                                                 dict[int, list[str]]]:
     """Which rows carry which fault: per-row faults, stuck windows (start, length), and the kinds of
     extra lines inserted before a row."""
     rng = np.random.default_rng([seed, 1])
     last = n_rows - 1  # the truncated line
     stuck: list[tuple[int, int]] = []
     for day in range(max(1, n_rows // DAY_S)):
-        length = int(min(rng.integers(2 * 3600, 4 * 3600 + 1), max(0, (n_rows - 2 * WARMUP) // 4)))
+        length = min(int(rng.integers(2 * 3600, 4 * 3600 + 1)), max(0, (n_rows - 2 * WARMUP) // 4))
         if length < 2:
             break
         lo = max(WARMUP, day * DAY_S)
@@ -218,10 +219,11 @@ def write_run(path: str | os.PathLike[str], n_rows: int, seed: int = 0, *, fault
                 fault = per_row.get(row)
                 if fault is not None:
                     kind, col = fault
+                    k = COLUMNS.index(col) if col is not None else -1
                     if kind in ("nan", "empty"):
-                        fields[COLUMNS.index(col)] = "" if kind == "empty" else str(grng.choice(["NaN", "nan"]))
+                        fields[k] = "" if kind == "empty" else str(grng.choice(["NaN", "nan"]))
                     elif kind == "spike":
-                        fields[COLUMNS.index(col)] = str(grng.choice(["1372.0", "-273.0"]))
+                        fields[k] = str(grng.choice(["1372.0", "-273.0"]))
                     elif kind == "fields":
                         if grng.random() < 0.5:
                             del fields[int(grng.integers(1, len(fields)))]
@@ -292,12 +294,12 @@ def stream(exe: str | os.PathLike[str], model: str | os.PathLike[str], csv: str 
     counted = [0]
     reached = threading.Event()
     done = threading.Event()
-    hwm = [None]
+    hwm: list[int | None] = [None]
+    out_fd, err_fd = proc.stdout.fileno(), proc.stderr.fileno()
 
     def read_out() -> None:
-        fd = proc.stdout.fileno()
         while True:
-            b = os.read(fd, 1 << 20)
+            b = os.read(out_fd, 1 << 20)
             if not b:
                 break
             chunks.append(b)
@@ -307,8 +309,7 @@ def stream(exe: str | os.PathLike[str], model: str | os.PathLike[str], csv: str 
         reached.set()
 
     def read_err() -> None:
-        fd = proc.stderr.fileno()
-        while b := os.read(fd, 1 << 16):
+        while b := os.read(err_fd, 1 << 16):
             errs.append(b)
 
     def poll() -> None:

@@ -57,7 +57,7 @@ def streamed(exe: Path, model: Path, csv: Path, faults: list[en.Fault], n_rows: 
     return dict(exit=s.returncode, data_lines=n_lines, output_rows=len(body),
                 expected_rows=n_lines - len(rejected), rows_per_s=round(n_lines / s.wall_s), wall_s=round(s.wall_s, 3),
                 peak_rss_kib=s.peak_rss_kib, rejected=len(reported),
-                rejected_as_injected=all(reported) and {int(m.group(1)) for m in reported} == rejected,
+                rejected_as_injected=all(reported) and {int(m.group(1)) for m in reported if m} == rejected,
                 well_formed=last == b"" and all(LINE.fullmatch(b) for b in body))
 
 
@@ -72,8 +72,8 @@ def main(argv: list[str] | None = None) -> None:
     exe = edge_binary()
     print(json.dumps(dict(machine=f"{platform.machine()}, {os.cpu_count()} CPUs, load average "
                                   f"{os.getloadavg()[0]:.2f} at the start", rows=args.rows, seed=args.seed)))
-    with tempfile.TemporaryDirectory() as d:
-        d = Path(d)
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
         en.write_run(d / "train.csv", 5_000, seed=1, faults=False)
         train = tr.read_run(d / "train.csv")
         models = {
