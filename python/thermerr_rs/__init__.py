@@ -23,6 +23,7 @@ from .errors import (
 from . import examples
 from .fcm import FuzzyCMeans
 from .grey import GM1N, BPNetwork, GreyBP
+from .guard import GuardedPrediction, add_guard, predict_guarded
 from .hybrid import HybridFilterNet
 from .linear import MLR
 from .metrics import Scores, scores
@@ -50,6 +51,9 @@ __all__ = [
     "Scores",
     "scores",
     "shape_offsets",
+    "add_guard",
+    "predict_guarded",
+    "GuardedPrediction",
     "MLR",
     "FuzzyCMeans",
     "SensorSelection",

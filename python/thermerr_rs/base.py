@@ -102,6 +102,7 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
     def _fitted_on(self: E, x: F64, names: list[str] | None, target: str | None = None,
                    inputs: str = "absolute") -> E:
         self.n_features_in_ = x.shape[1]
+        self.guard_ = None  # a guard learnt on an earlier fit no longer applies
         self.feature_names_in_ = names
         self.target_name_ = target
         self.inputs_ = inputs
@@ -198,8 +199,10 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
     def to_json(self) -> str:
         """The model file's text; the core validates the model before it writes it."""
         self._check_fitted()
+        head = self._header()
+        head["guard"] = getattr(self, "guard_", None)  # thermerr_rs.add_guard
         try:
-            header = json.dumps(self._header(), allow_nan=False)
+            header = json.dumps(head, allow_nan=False)
         except (TypeError, ValueError) as e:
             raise ModelFormatError(f"cannot save the parameters of this model: {e}") from None
         text: str = _core.write_model(self._file_kind(), header, self._fitted())
@@ -331,10 +334,12 @@ def _from_text(text: str, expect: type[Estimator] | None = None) -> Estimator:
     est.target_name_ = header.get("target")
     est.inputs_ = header.get("inputs", "absolute")
     if not pre:
+        est.guard_ = header.get("guard")
         return est
     wrapped: Estimator = _WRAPPERS[pre["kind"]]._wrap_restored(
         est, _core.Preprocessing.from_json(json.dumps(pre), n_features)
     )
+    wrapped.guard_ = header.get("guard")
     return wrapped
 
 

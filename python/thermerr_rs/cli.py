@@ -94,6 +94,17 @@ _positive_int = _int_at_least(1)
 _nonneg_int = _int_at_least(0)
 
 
+def _nonneg_float(text: str) -> float:
+    """An argparse type: a finite number >= 0 (e.g. seconds)."""
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not (v >= 0 and v != float("inf")):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
+    return v
+
+
 def _check_out(out: str, *inputs: str | None) -> None:
     """Refuse an output path that is one of the command's inputs (it would overwrite it)."""
     target = os.path.realpath(out)
@@ -198,6 +209,15 @@ def cmd_fit(args: argparse.Namespace) -> int:
         held = scores(test_run[args.axis], model.predict_run(test_run))
         report["test"] = held.as_dict()
         _print_scores(args, f"held-out run {test_run.source}", held)
+    if not args.no_guard:
+        from .guard import add_guard
+
+        _stage(args, "learning the sensor-fault guard")
+        add_guard(model, run, hold_s=args.hold)
+        n_fb = len(model.guard_["fallbacks"])
+        report["guard"] = {"hold_s": args.hold, "fallbacks": n_fb}
+        _say(args, f"sensor-fault guard: limits for {len(sensors)} sensors, hold {args.hold:g} s, "
+                   f"{n_fb} fallback models" + ("" if n_fb else " (the output freezes when a sensor stays out)"))
     path = model.save(args.out)
     report["out"] = str(path)
     if args.json:
@@ -407,6 +427,11 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--inputs", choices=["rise", "absolute"], default="rise",
                    help="model from each sensor's rise since the run's start (default) or absolute readings")
     f.add_argument("--test", help="a held-out run to score the model on")
+    f.add_argument("--no-guard", action="store_true",
+                   help="write no sensor-fault guard (default: limits learnt from the run and, for mlr/rbf/svr/bp, "
+                        "one fallback model without each sensor, for thermerr-edge)")
+    f.add_argument("--hold", type=_nonneg_float, default=300.0,
+                   help="seconds the edge holds a faulty sensor's last good reading before it falls back (default 300)")
     f.add_argument("--out", required=True, help="model file to write (JSON)")
     common(f)
     f.set_defaults(func=cmd_fit)

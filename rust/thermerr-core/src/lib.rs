@@ -13,6 +13,7 @@ pub mod error;
 #[cfg(feature = "fit")]
 pub mod fcm;
 pub mod grey;
+pub mod guard;
 pub mod hybrid;
 pub mod interrupt;
 #[cfg(feature = "fit")]

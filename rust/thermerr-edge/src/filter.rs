@@ -2,6 +2,8 @@
 //! columns by name, then each data line becomes one sample. The CLI (`main.rs`) and the fuzz
 //! target `edge_stream` run lines through this one code path.
 
+use thermerr_core::guard::GuardedPredictor;
+
 use crate::Predictor;
 
 /// Where the model's features and the time are in the lines of one input.
@@ -22,6 +24,14 @@ pub struct Output<'l> {
     pub time: Option<&'l str>,
     pub row: usize,
     pub y: f64,
+}
+
+/// A guarded line's outcome: a prediction (the predictor's `write_status` says how it was
+/// made), or nothing yet because the named sensor has not given a good reading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Guarded<'l> {
+    Predicted(Output<'l>),
+    Waiting,
 }
 
 impl LineFilter {
@@ -63,18 +73,60 @@ impl LineFilter {
 
     /// Parses the model's features of one data line; returns them and the time field as written.
     pub fn parse_row<'l>(&mut self, line: &'l str) -> Result<(&[f64], Option<&'l str>), String> {
+        self.parse_fields(line, false)
+    }
+
+    /// As [`LineFilter::parse_row`]; with `missing_ok` a feature field that is not a finite
+    /// number reads as NaN (a sensor fault for the guard) instead of rejecting the line. The
+    /// time field, when there is one, must be a finite number either way.
+    fn parse_fields<'l>(
+        &mut self,
+        line: &'l str,
+        missing_ok: bool,
+    ) -> Result<(&[f64], Option<&'l str>), String> {
         let f: Vec<&str> = line.split(',').collect();
         if f.len() != self.width {
             return Err(format!("expected {} fields, got {}", self.width, f.len()));
+        }
+        let time = self.time.map(|k| f[k].trim());
+        if let Some(t) = time {
+            if !t.parse::<f64>().is_ok_and(f64::is_finite) {
+                return Err(format!("column `time_s`: not a finite number ({t:?})"));
+            }
         }
         for ((xv, &k), name) in self.x.iter_mut().zip(&self.features).zip(&self.names) {
             let raw = f[k].trim();
             match raw.parse::<f64>() {
                 Ok(v) if v.is_finite() => *xv = v,
+                _ if missing_ok => *xv = f64::NAN,
                 _ => return Err(format!("column `{name}`: not a finite number ({raw:?})")),
             }
         }
-        Ok((&self.x, self.time.map(|k| f[k].trim())))
+        Ok((&self.x, time))
+    }
+
+    /// One data line through a guarded model: a feature field that is empty or not a finite
+    /// number is a sensor fault the guard handles, not a rejected line; a line of the wrong
+    /// width or a bad time still is.
+    pub fn feed_guarded<'l>(
+        &mut self,
+        g: &mut GuardedPredictor,
+        line: &'l str,
+    ) -> Result<Option<Guarded<'l>>, String> {
+        let l = line.trim_end_matches(['\r', '\n']);
+        if l.trim().is_empty() {
+            return Ok(None);
+        }
+        let (x, time) = self.parse_fields(l, true)?;
+        let t = time.map(|t| t.parse::<f64>().unwrap_or(f64::NAN));
+        match g.step(t, x).map_err(|e| e.to_string())? {
+            None => Ok(Some(Guarded::Waiting)),
+            Some(y) => {
+                let row = self.row;
+                self.row += 1;
+                Ok(Some(Guarded::Predicted(Output { time, row, y })))
+            }
+        }
     }
 
     /// One data line through the model: `Ok(None)` for a blank line, the prediction for a good

@@ -17,6 +17,7 @@ pub mod filter;
 use std::path::Path;
 
 pub use thermerr_core::artifact::{Artifact, Inputs, Model, Preprocessing, FORMAT_VERSION};
+pub use thermerr_core::guard::GuardedPredictor;
 
 /// Everything that can go wrong loading a model or predicting.
 #[derive(Debug, thiserror::Error)]
@@ -95,6 +96,12 @@ impl Predictor {
     /// Whether predictions depend on earlier samples of the run.
     pub fn stateful(&self) -> bool {
         self.0.stateful()
+    }
+
+    /// The model with its sensor-fault guard ([`thermerr_core::guard`]); `None` when the file
+    /// has no guard.
+    pub fn guarded(&self) -> Result<Option<GuardedPredictor>> {
+        GuardedPredictor::new(self.0.clone()).map_err(format_error)
     }
 
     /// Forgets the run so far: the next sample starts a new run.

@@ -8,6 +8,12 @@
 //! `<target>_offset`: the prediction shaped into what the CNC accepts (clamped, dead band, rate
 //! limited per second of `time_s` — per row without it — and quantised; `thermerr_core::shape`).
 //!
+//! A model file with a `guard` (`thermerr fit` writes one; `thermerr_core::guard`) adds a last
+//! column, `status`: `ok`, or the sensors whose reading was faulty (missing, out of range, too
+//! fast, stuck) and what was done — `held:T_x` (last good reading), `fallback:T_x` (the model
+//! fitted without it), `frozen:T_x` (the last output repeated), joined by `;`. A missing reading
+//! is then a fault to handle, not a rejected line. `--no-guard` ignores the guard.
+//!
 //! `--bench-latency N` times N predictions over the run's rows (cycling, with a reset at each
 //! pass) and prints per-sample latency percentiles and the peak resident memory as JSON.
 
@@ -16,11 +22,14 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 use thermerr_core::shape::{Shaper, Shaping};
-use thermerr_edge::filter::LineFilter;
+use thermerr_edge::filter::{Guarded, LineFilter};
 use thermerr_edge::Predictor;
 
-const USAGE: &str = "usage: thermerr-edge MODEL.json [RUN.csv] [--shape SPEC] [--bench-latency N]
+const USAGE: &str = "usage: thermerr-edge MODEL.json [RUN.csv] [--shape SPEC] [--no-guard] [--bench-latency N]
   Reads CSV rows (header first) from RUN.csv or stdin, writes time_s,<target>_pred per row.
+  A model fitted with a sensor-fault guard adds a status column (ok, held:T_x, fallback:T_x,
+  frozen:T_x, joined by ;): missing, out-of-range, too fast or stuck readings are held, then
+  predicted without (fallback model) or the last output repeated. --no-guard ignores the guard.
   --shape limit=50,rate=2,deadband=0.5,unit=0.1,bits=16 adds <target>_offset, the prediction
   clamped (um), held within a dead band (um), rate-limited (um/s) and quantised (um, register bits).";
 
@@ -34,6 +43,7 @@ fn run(
     input: Box<dyn BufRead>,
     bench: Option<usize>,
     mut shaper: Option<Shaper>,
+    use_guard: bool,
 ) -> ExitCode {
     let mut lines = input.lines();
     let header = match lines.next() {
@@ -55,15 +65,28 @@ fn run(
         }
         return latency(p, &rows, n);
     }
+    let mut guarded = if use_guard {
+        match p.guarded() {
+            Ok(g) => g,
+            Err(e) => return fail(e),
+        }
+    } else {
+        None
+    };
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
-    let header = match shaper {
-        Some(_) => format!("time_s,{target}_pred,{target}_offset"),
-        None => format!("time_s,{target}_pred"),
-    };
+    let mut header = format!("time_s,{target}_pred");
+    if shaper.is_some() {
+        header.push_str(&format!(",{target}_offset"));
+    }
+    if guarded.is_some() {
+        header.push_str(",status");
+    }
     if writeln!(out, "{header}").is_err() {
         return ExitCode::SUCCESS; // the reader went away
     }
+    let step_s = guarded.as_ref().map_or(1.0, |g| g.step_s());
+    let mut status = String::new();
     let mut accepted = 0usize;
     let mut rejected = 0usize;
     for (k, line) in lines.enumerate() {
@@ -76,34 +99,56 @@ fn run(
                 continue;
             }
         };
-        match filter.feed(p, &line) {
-            Ok(None) => {}
-            Ok(Some(o)) => {
-                let ok = match (o.time, shaper.as_mut()) {
-                    (Some(t), None) => writeln!(out, "{t},{}", o.y),
-                    (None, None) => writeln!(out, "{},{}", o.row, o.y),
-                    (time, Some(s)) => {
-                        // the rate limit is per second of time_s, per row without it
-                        let at = time
-                            .and_then(|t| t.parse::<f64>().ok())
-                            .unwrap_or(o.row as f64);
-                        let offset = s.apply(at, o.y);
-                        match time {
-                            Some(t) => writeln!(out, "{t},{},{offset}", o.y),
-                            None => writeln!(out, "{},{},{offset}", o.row, o.y),
-                        }
-                    }
-                };
-                if ok.and_then(|_| out.flush()).is_err() {
-                    return ExitCode::SUCCESS;
+        let fed = match guarded.as_mut() {
+            None => filter.feed(p, &line).map(|o| o.map(Guarded::Predicted)),
+            Some(g) => filter.feed_guarded(g, &line),
+        };
+        let o = match fed {
+            Ok(None) => continue,
+            Ok(Some(Guarded::Predicted(o))) => o,
+            Ok(Some(Guarded::Waiting)) => {
+                status.clear();
+                if let Some(g) = guarded.as_ref() {
+                    let _ = g.write_status(&mut status);
                 }
-                accepted += 1;
+                eprintln!(
+                    "thermerr-edge: line {lineno}: {status} (no good reading yet); nothing predicted"
+                );
+                rejected += 1;
+                continue;
             }
             Err(e) => {
                 eprintln!("thermerr-edge: line {lineno}: {e}; skipped");
                 rejected += 1;
+                continue;
             }
+        };
+        let ok = (|| -> std::io::Result<()> {
+            match o.time {
+                Some(t) => write!(out, "{t},{}", o.y)?,
+                None => write!(out, "{},{}", o.row, o.y)?,
+            }
+            if let Some(s) = shaper.as_mut() {
+                // the rate limit is per second of time_s; without it, per row of step_s
+                // seconds (the guard's training step, else 1 s)
+                let at = o
+                    .time
+                    .and_then(|t| t.parse::<f64>().ok())
+                    .unwrap_or(o.row as f64 * step_s);
+                write!(out, ",{}", s.apply(at, o.y))?;
+            }
+            if let Some(g) = guarded.as_ref() {
+                status.clear();
+                let _ = g.write_status(&mut status);
+                write!(out, ",{status}")?;
+            }
+            writeln!(out)?;
+            out.flush()
+        })();
+        if ok.is_err() {
+            return ExitCode::SUCCESS;
         }
+        accepted += 1;
     }
     if accepted == 0 && rejected > 0 {
         // nothing came out: the input does not fit the model, which is not a success
@@ -175,6 +220,13 @@ fn main() -> ExitCode {
         }
         args.drain(k..k + 2);
     }
+    let use_guard = match args.iter().position(|a| a == "--no-guard") {
+        Some(k) => {
+            args.remove(k);
+            false
+        }
+        None => true,
+    };
     if args.iter().any(|a| a == "-h" || a == "--help") {
         println!("{USAGE}");
         return ExitCode::SUCCESS;
@@ -194,5 +246,5 @@ fn main() -> ExitCode {
         },
         None => Box::new(BufReader::new(std::io::stdin())),
     };
-    run(&mut p, input, bench, shaper)
+    run(&mut p, input, bench, shaper, use_guard)
 }

@@ -198,7 +198,86 @@ impl PyPreprocessing {
     }
 }
 
+/// Sensor-fault limits learnt from training readings `x` (rows at `times` seconds), as the
+/// JSON of a model file's `guard` (no fallbacks: Python fits those), and whether the model file
+/// `text` can use fallback models (one without state from sample to sample).
+#[pyfunction]
+#[pyo3(signature = (text, x, times, hold_s))]
+fn guard_from_training(
+    text: &str,
+    x: PyReadonlyArray2<'_, f64>,
+    times: Option<PyReadonlyArray1<'_, f64>>,
+    hold_s: f64,
+) -> PyResult<(String, bool)> {
+    let p = thermerr_core::artifact::Predictor::from_json(text).map_err(PyErrWrap)?;
+    let fallbacks = thermerr_core::guard::takes_fallbacks(&p);
+    let xs = samples(&x)?;
+    let t = match &times {
+        Some(a) => Some(slice1(a)?),
+        None => None,
+    };
+    let g = thermerr_core::guard::Guard::from_training(xs.as_slice(), xs.ncols(), t, hold_s)
+        .map_err(PyErrWrap)?;
+    let g = serde_json::to_string(&g).map_err(|e| format_err(e.to_string()))?;
+    Ok((g, fallbacks))
+}
+
+/// A run's raw readings (NaN where missing) through a guarded model file, row by row as
+/// `thermerr-edge` runs it: the predictions (NaN while a sensor has not given a good reading)
+/// and each row's status.
+#[pyfunction]
+#[pyo3(signature = (text, x, times))]
+fn predict_guarded<'py>(
+    py: Python<'py>,
+    text: &str,
+    x: PyReadonlyArray2<'py, f64>,
+    times: Option<PyReadonlyArray1<'py, f64>>,
+) -> PyResult<(Bound<'py, PyArray1<f64>>, Vec<String>)> {
+    let xs = samples(&x)?;
+    let t = match &times {
+        Some(a) => Some(slice1(a)?),
+        None => None,
+    };
+    let p = thermerr_core::artifact::Predictor::from_json(text).map_err(PyErrWrap)?;
+    let mut g = thermerr_core::guard::GuardedPredictor::new(p)
+        .map_err(PyErrWrap)?
+        .ok_or_else(|| format_err("the model file has no guard (fit it with one)"))?;
+    let d = xs.ncols();
+    if d != g.predictor().n_features() {
+        return Err(PyErrWrap(Error::Shape(format!(
+            "the model takes {} features, got {d} columns",
+            g.predictor().n_features()
+        )))
+        .into());
+    }
+    if let Some(t) = t {
+        if t.len() != xs.nrows() {
+            return Err(PyErrWrap(Error::Shape(format!(
+                "{} times for {} rows",
+                t.len(),
+                xs.nrows()
+            )))
+            .into());
+        }
+    }
+    let (y, status) = crate::detach_short(py, || {
+        let mut y = Vec::with_capacity(xs.nrows());
+        let mut status = Vec::with_capacity(xs.nrows());
+        for (i, row) in xs.as_slice().chunks_exact(d).enumerate() {
+            y.push(g.step(t.map(|t| t[i]), row)?.unwrap_or(f64::NAN));
+            let mut st = String::new();
+            g.write_status(&mut st)
+                .map_err(|e| Error::Format(e.to_string()))?;
+            status.push(st);
+        }
+        Ok((y, status))
+    })?;
+    Ok((vec_to_py(py, y), status))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(guard_from_training, m)?)?;
+    m.add_function(wrap_pyfunction!(predict_guarded, m)?)?;
     m.add_class::<PyPreprocessing>()?;
     m.add_function(wrap_pyfunction!(read_model, m)?)?;
     m.add_function(wrap_pyfunction!(write_model, m)?)?;

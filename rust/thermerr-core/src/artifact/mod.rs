@@ -19,6 +19,7 @@ use serde_json::{Map, Value};
 
 use crate::error::{Error, Result};
 use crate::grey::GreyBpModel;
+use crate::guard::Guard;
 use crate::hybrid::HybridModel;
 use crate::linear::MlrModel;
 use crate::nn::{scale01, BpModel};
@@ -394,6 +395,9 @@ pub struct Header {
     pub target: Option<String>,
     pub inputs: Inputs,
     pub preprocessing: Option<Preprocessing>,
+    /// sensor-fault limits and fallback models ([`crate::guard`]), when fitted with them
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub guard: Option<Guard>,
 }
 
 impl Header {
@@ -409,6 +413,9 @@ impl Header {
         }
         if let Some(p) = &self.preprocessing {
             p.validate(n_features)?;
+        }
+        if let Some(g) = &self.guard {
+            g.validate(self, n_features)?;
         }
         Ok(())
     }
@@ -432,6 +439,8 @@ struct RawFile {
     inputs: Option<String>,
     #[serde(default)]
     preprocessing: Option<Value>,
+    #[serde(default)]
+    guard: Option<Value>,
     model: Value,
 }
 
@@ -486,6 +495,12 @@ pub fn read_envelope(text: &str) -> Result<(String, usize, Header, Value)> {
         target: raw.target,
         inputs,
         preprocessing: read_preprocessing(raw.preprocessing)?,
+        guard: match raw.guard {
+            None | Some(Value::Null) => None,
+            Some(v) => Some(
+                serde_json::from_value(v).map_err(|e| format_err(format!("guard: {e}")))?,
+            ),
+        },
     };
     Ok((raw.kind, n, header, raw.model))
 }
@@ -498,7 +513,7 @@ pub fn write_envelope(
     model: Value,
 ) -> Result<String> {
     check_model_finite(&model)?;
-    let doc = serde_json::json!({
+    let mut doc = serde_json::json!({
         "format_version": FORMAT_VERSION,
         "kind": kind,
         "library": header.library,
@@ -510,6 +525,10 @@ pub fn write_envelope(
         "preprocessing": header.preprocessing,
         "model": model,
     });
+    if let Some(g) = &header.guard {
+        // validated with the header (finite limits): serde_json would write NaN as null
+        doc["guard"] = serde_json::to_value(g).map_err(|e| format_err(e.to_string()))?;
+    }
     serde_json::to_string_pretty(&doc).map_err(|e| format_err(e.to_string()))
 }
 

@@ -1,0 +1,512 @@
+//! Sensor faults on the edge: the `guard` of a model file and the streaming predictor that
+//! applies it.
+//!
+//! A thermocouple that opens reads −273 °C or 1372 °C, a cable that comes loose gives empty
+//! fields, a frozen transmitter repeats one value for hours, a ground fault spikes. Fed to a
+//! model, each becomes a compensation offset of any size. The guard checks every reading of
+//! every feature against limits learnt from the training run ([`Guard::from_training`]):
+//!
+//! - a plausible range (`min`..`max`): the training range widened by its own span, at least
+//!   [`RANGE_MARGIN_FLOOR`] units each way;
+//! - a largest rate of change (`max_rate`, units per second) against the last good reading:
+//!   [`RATE_FACTOR`] times the fastest change seen in training, at least [`RATE_FLOOR`];
+//! - a stuck detector (`stuck_s`): a reading repeated exactly for longer than twice the longest
+//!   repeat in training, at least [`STUCK_FLOOR_S`].
+//!
+//! A faulted reading is replaced by the sensor's last good reading for up to `hold_s` seconds
+//! (`held:T_x`). Beyond that the prediction comes from the fallback model fitted without that
+//! sensor and stored in the same file (`fallback:T_x`), or, when there is none (two sensors out
+//! at once, or a model that carries state from sample to sample), the last output is repeated
+//! (`frozen:T_x`). A sensor is good again as soon as a reading passes the checks. Until every
+//! sensor has given one good reading nothing is predicted (`waiting:T_x`).
+//!
+//! Time is the run's `time_s`, or the row count times the training run's median step `step_s`.
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use crate::artifact::{Artifact, Header, Predictor};
+use crate::error::{Error, Result};
+
+/// The training range is widened by its span, and by at least this many units, each way.
+pub const RANGE_MARGIN_FLOOR: f64 = 20.0;
+/// The largest rate of change accepted is this many times the fastest seen in training.
+pub const RATE_FACTOR: f64 = 5.0;
+/// ... and at least this many units per second.
+pub const RATE_FLOOR: f64 = 0.01;
+/// A value repeated for longer than twice the longest repeat in training, and at least this
+/// long (s), is a stuck sensor.
+pub const STUCK_FLOOR_S: f64 = 1800.0;
+/// Default time a faulted reading is replaced by the last good one (s).
+pub const DEFAULT_HOLD_S: f64 = 300.0;
+
+fn format_err(msg: impl Into<String>) -> Error {
+    Error::Format(msg.into())
+}
+
+/// Limits of one feature's readings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorLimits {
+    pub min: f64,
+    pub max: f64,
+    /// units per second, against the last good reading
+    pub max_rate: f64,
+    /// seconds one value may repeat before the sensor counts as stuck
+    pub stuck_s: f64,
+}
+
+/// A model fitted without one feature, used when that feature's sensor has failed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fallback {
+    /// the feature it does without
+    pub without: String,
+    /// a whole model file (without a guard of its own)
+    pub model: Value,
+}
+
+/// The `guard` entry of a model file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Guard {
+    /// one per feature, in the model's order
+    pub sensors: Vec<SensorLimits>,
+    /// seconds a faulted reading is replaced by the last good one
+    pub hold_s: f64,
+    /// seconds per row when the input has no `time_s`
+    pub step_s: f64,
+    #[serde(default)]
+    pub fallbacks: Vec<Fallback>,
+}
+
+impl Guard {
+    /// Limits learnt from a training run: `x` row-major with `d` columns, `times` in seconds
+    /// (one per row) or `None` for rows 1 s apart.
+    pub fn from_training(x: &[f64], d: usize, times: Option<&[f64]>, hold_s: f64) -> Result<Self> {
+        if d == 0 || x.len() % d != 0 || x.len() < 2 * d {
+            return Err(Error::Shape(format!(
+                "the guard needs at least 2 rows of {d} features, got {} values",
+                x.len()
+            )));
+        }
+        let n = x.len() / d;
+        if let Some(t) = times {
+            if t.len() != n {
+                return Err(Error::Shape(format!("{} times for {n} rows", t.len())));
+            }
+        }
+        if !(hold_s.is_finite() && hold_s >= 0.0) {
+            return Err(Error::param("hold_s", format!("must be >= 0 s, got {hold_s}")));
+        }
+        if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+            return Err(Error::Shape(format!(
+                "row {}, feature {}: not a finite number",
+                i / d,
+                i % d
+            )));
+        }
+        let time = |i: usize| times.map_or(i as f64, |t| t[i]);
+        let mut steps: Vec<f64> = (1..n).map(|i| time(i) - time(i - 1)).collect();
+        if let Some(k) = steps.iter().position(|s| !(s.is_finite() && *s > 0.0)) {
+            return Err(Error::Shape(format!(
+                "times must increase: row {} is not after row {k}",
+                k + 1
+            )));
+        }
+        steps.sort_by(f64::total_cmp);
+        let step_s = steps[steps.len() / 2];
+        let sensors = (0..d)
+            .map(|j| {
+                let col = |i: usize| x[i * d + j];
+                let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+                let (mut rate, mut repeat, mut run_start) = (0.0f64, 0.0f64, time(0));
+                for i in 0..n {
+                    lo = lo.min(col(i));
+                    hi = hi.max(col(i));
+                    if i > 0 {
+                        let dt = time(i) - time(i - 1);
+                        rate = rate.max((col(i) - col(i - 1)).abs() / dt);
+                        if col(i) != col(i - 1) {
+                            run_start = time(i);
+                        }
+                        repeat = repeat.max(time(i) - run_start);
+                    }
+                }
+                let margin = (hi - lo).max(RANGE_MARGIN_FLOOR);
+                SensorLimits {
+                    min: lo - margin,
+                    max: hi + margin,
+                    max_rate: (RATE_FACTOR * rate).max(RATE_FLOOR),
+                    stuck_s: (2.0 * repeat).max(STUCK_FLOOR_S),
+                }
+            })
+            .collect();
+        Ok(Guard {
+            sensors,
+            hold_s,
+            step_s,
+            fallbacks: Vec::new(),
+        })
+    }
+
+    /// Checks the guard against the model file around it: one limit per feature, finite and
+    /// ordered; each fallback a valid model file of a model without state from sample to
+    /// sample, reading the same features but the one it does without, for the same target.
+    pub fn validate(&self, header: &Header, n_features: usize) -> Result<()> {
+        if self.sensors.len() != n_features {
+            return Err(format_err(format!(
+                "guard: {} sensor limits for {n_features} features",
+                self.sensors.len()
+            )));
+        }
+        let name = |j: usize| {
+            header
+                .features
+                .as_ref()
+                .map_or_else(|| format!("feature {j}"), |f| f[j].clone())
+        };
+        for (j, s) in self.sensors.iter().enumerate() {
+            let ok = s.min.is_finite()
+                && s.max.is_finite()
+                && s.min < s.max
+                && s.max_rate.is_finite()
+                && s.max_rate > 0.0
+                && s.stuck_s.is_finite()
+                && s.stuck_s > 0.0;
+            if !ok {
+                return Err(format_err(format!(
+                    "guard: limits of {} must be finite with min < max and max_rate, stuck_s > 0 \
+                     (got min {}, max {}, max_rate {}, stuck_s {})",
+                    name(j),
+                    s.min,
+                    s.max,
+                    s.max_rate,
+                    s.stuck_s
+                )));
+            }
+        }
+        if !(self.hold_s.is_finite() && self.hold_s >= 0.0) {
+            return Err(format_err(format!("guard: hold_s must be >= 0, got {}", self.hold_s)));
+        }
+        if !(self.step_s.is_finite() && self.step_s > 0.0) {
+            return Err(format_err(format!("guard: step_s must be > 0, got {}", self.step_s)));
+        }
+        if !self.fallbacks.is_empty() {
+            self.fallback_predictors(header)?;
+        }
+        Ok(())
+    }
+
+    /// For each feature, the fallback model fitted without it (if there is one), with the
+    /// positions of its features among the model's.
+    fn fallback_predictors(&self, header: &Header) -> Result<Vec<Option<(Predictor, Vec<usize>)>>> {
+        let features = header.features.as_ref().ok_or_else(|| {
+            format_err("guard: fallbacks need the model's feature names (fit it on a run)")
+        })?;
+        let mut out: Vec<Option<(Predictor, Vec<usize>)>> = vec![None; features.len()];
+        for (k, fb) in self.fallbacks.iter().enumerate() {
+            let what = format!("guard: fallback {k} (without {})", fb.without);
+            let j = features.iter().position(|f| *f == fb.without).ok_or_else(|| {
+                format_err(format!("{what}: the model has no feature {:?}", fb.without))
+            })?;
+            if out[j].is_some() {
+                return Err(format_err(format!("{what}: a second fallback without it")));
+            }
+            let a = Artifact::from_json(&fb.model.to_string())
+                .map_err(|e| format_err(format!("{what}: {e}")))?;
+            if a.header.guard.is_some() {
+                return Err(format_err(format!("{what}: has a guard of its own")));
+            }
+            let p = Predictor::new(a);
+            if !static_model(&p) {
+                return Err(format_err(format!(
+                    "{what}: a {} model carries state from sample to sample and cannot stand in",
+                    p.kind()
+                )));
+            }
+            let want: Vec<&String> = features.iter().filter(|f| **f != fb.without).collect();
+            let got: Vec<&String> = p.features().unwrap_or(&[]).iter().collect();
+            if got != want {
+                return Err(format_err(format!(
+                    "{what}: reads {got:?}, expected the model's features without it ({want:?})"
+                )));
+            }
+            if p.target() != header.target.as_deref() || p.artifact().header.inputs != header.inputs
+            {
+                return Err(format_err(format!(
+                    "{what}: predicts {:?} from {} inputs, the model {:?} from {}",
+                    p.target(),
+                    p.artifact().header.inputs.as_str(),
+                    header.target,
+                    header.inputs.as_str()
+                )));
+            }
+            let idx = (0..features.len()).filter(|&i| i != j).collect();
+            out[j] = Some((p, idx));
+        }
+        Ok(out)
+    }
+}
+
+/// Whether a model can have fallback models: one whose prediction depends on the current
+/// sample only (apart from a rise baseline), as must the fallbacks themselves.
+pub fn takes_fallbacks(p: &Predictor) -> bool {
+    static_model(p)
+}
+
+fn static_model(p: &Predictor) -> bool {
+    !p.model().sequential()
+        && !p
+            .artifact()
+            .header
+            .preprocessing
+            .as_ref()
+            .is_some_and(|pre| pre.accumulates())
+}
+
+/// What happened to one sensor's reading of the current row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SensorStatus {
+    Ok,
+    /// no good reading yet: nothing can be predicted
+    Waiting,
+    /// replaced by the last good reading
+    Held,
+    /// out for longer than `hold_s`; the fallback model without it predicts
+    Fallback,
+    /// out for longer than `hold_s` and no fallback applies: the last output is repeated
+    Frozen,
+}
+
+impl SensorStatus {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            SensorStatus::Ok => "ok",
+            SensorStatus::Waiting => "waiting",
+            SensorStatus::Held => "held",
+            SensorStatus::Fallback => "fallback",
+            SensorStatus::Frozen => "frozen",
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+struct SensorState {
+    last_good: f64,
+    last_good_t: f64,
+    have_good: bool,
+    fault_since: Option<f64>,
+    repeat_value: f64,
+    repeat_since: f64,
+    status: SensorStatus,
+}
+
+/// A model with its guard, predicting a run sample by sample from raw readings (NaN for a
+/// missing one). Allocates nothing per sample.
+#[derive(Clone, Debug)]
+pub struct GuardedPredictor {
+    main: Predictor,
+    guard: Guard,
+    names: Vec<String>,
+    fallbacks: Vec<Option<(Predictor, Vec<usize>)>>,
+    sensors: Vec<SensorState>,
+    x: Vec<f64>,
+    xf: Vec<f64>,
+    last_y: Option<f64>,
+    primed: bool,
+    row: usize,
+}
+
+impl GuardedPredictor {
+    /// The model file's predictor with its guard; `None` when the file has no guard.
+    pub fn new(main: Predictor) -> Result<Option<Self>> {
+        let header = &main.artifact().header;
+        let Some(guard) = header.guard.clone() else {
+            return Ok(None);
+        };
+        let n = main.n_features();
+        let fallbacks = if static_model(&main) {
+            guard.fallback_predictors(header)?
+        } else {
+            vec![None; n]
+        };
+        let names = (0..n)
+            .map(|j| {
+                header
+                    .features
+                    .as_ref()
+                    .map_or_else(|| format!("x{j}"), |f| f[j].clone())
+            })
+            .collect();
+        let fresh = SensorState {
+            last_good: 0.0,
+            last_good_t: 0.0,
+            have_good: false,
+            fault_since: None,
+            repeat_value: f64::NAN,
+            repeat_since: 0.0,
+            status: SensorStatus::Waiting,
+        };
+        Ok(Some(GuardedPredictor {
+            main,
+            guard,
+            names,
+            fallbacks,
+            sensors: vec![fresh; n],
+            x: vec![0.0; n],
+            xf: vec![0.0; n.saturating_sub(1)],
+            last_y: None,
+            primed: false,
+            row: 0,
+        }))
+    }
+
+    pub fn predictor(&self) -> &Predictor {
+        &self.main
+    }
+
+    /// Seconds per row used when the input has no times.
+    pub fn step_s(&self) -> f64 {
+        self.guard.step_s
+    }
+
+    /// Forgets the run so far.
+    pub fn reset(&mut self) {
+        self.main.reset();
+        for (p, _) in self.fallbacks.iter_mut().flatten() {
+            p.reset();
+        }
+        for s in &mut self.sensors {
+            s.have_good = false;
+            s.fault_since = None;
+            s.repeat_value = f64::NAN;
+            s.status = SensorStatus::Waiting;
+        }
+        self.last_y = None;
+        self.primed = false;
+        self.row = 0;
+    }
+
+    /// One row of raw readings (NaN for a missing one) at time `t` (seconds; `None` for the
+    /// row count times `step_s`): the prediction, or `None` while some sensor has not given a
+    /// good reading yet. [`GuardedPredictor::write_status`] tells what was done.
+    pub fn step(&mut self, t: Option<f64>, raw: &[f64]) -> Result<Option<f64>> {
+        let n = self.x.len();
+        if raw.len() != n {
+            return Err(Error::Shape(format!(
+                "the model takes {n} features, got {}",
+                raw.len()
+            )));
+        }
+        let t = t.unwrap_or(self.row as f64 * self.guard.step_s);
+        self.row += 1;
+        let hold = self.guard.hold_s;
+        let mut waiting = false;
+        let mut out: Option<usize> = None;
+        let mut outs = 0usize;
+        for (j, (s, lim)) in self.sensors.iter_mut().zip(&self.guard.sensors).enumerate() {
+            let v = raw[j];
+            let mut good = v.is_finite() && v >= lim.min && v <= lim.max;
+            if good && s.have_good {
+                let dt = (t - s.last_good_t).max(self.guard.step_s);
+                good = (v - s.last_good).abs() <= lim.max_rate * dt;
+            }
+            if v.is_finite() {
+                if v != s.repeat_value {
+                    s.repeat_value = v;
+                    s.repeat_since = t;
+                } else if t - s.repeat_since > lim.stuck_s {
+                    good = false;
+                }
+            }
+            if good {
+                s.last_good = v;
+                s.last_good_t = t;
+                s.have_good = true;
+                s.fault_since = None;
+                s.status = SensorStatus::Ok;
+                self.x[j] = v;
+                continue;
+            }
+            let since = *s.fault_since.get_or_insert(t);
+            self.x[j] = s.last_good;
+            s.status = if !s.have_good {
+                waiting = true;
+                SensorStatus::Waiting
+            } else if t - since <= hold {
+                SensorStatus::Held
+            } else {
+                out = Some(j);
+                outs += 1;
+                SensorStatus::Frozen
+            };
+        }
+        if waiting {
+            return Ok(None);
+        }
+        let y_main = self.main.predict_sample(&self.x)?;
+        if !self.primed {
+            // the fallbacks' rise baseline is the run's first sample, as the main model's
+            for (p, idx) in self.fallbacks.iter_mut().flatten() {
+                for (f, &i) in self.xf.iter_mut().zip(idx.iter()) {
+                    *f = self.x[i];
+                }
+                p.predict_sample(&self.xf)?;
+            }
+            self.primed = true;
+        }
+        let y = match (outs, out) {
+            (0, _) => y_main,
+            (1, Some(j)) if self.fallbacks[j].is_some() => {
+                let (p, idx) = self.fallbacks[j].as_mut().expect("checked above");
+                for (f, &i) in self.xf.iter_mut().zip(idx.iter()) {
+                    *f = self.x[i];
+                }
+                self.sensors[j].status = SensorStatus::Fallback;
+                p.predict_sample(&self.xf)?
+            }
+            _ => self.last_y.unwrap_or(y_main),
+        };
+        self.last_y = Some(y);
+        Ok(Some(y))
+    }
+
+    /// Each sensor's status for the last row.
+    pub fn statuses(&self) -> impl Iterator<Item = (&str, SensorStatus)> {
+        self.names
+            .iter()
+            .map(String::as_str)
+            .zip(self.sensors.iter().map(|s| s.status))
+    }
+
+    /// Whether every sensor was good on the last row.
+    pub fn all_ok(&self) -> bool {
+        self.sensors.iter().all(|s| s.status == SensorStatus::Ok)
+    }
+
+    /// The last row's status as written on an output line: `ok`, or the sensors that were not,
+    /// e.g. `held:T_3` or `fallback:T_3;held:T_7` (no commas, no allocation).
+    pub fn write_status(&self, w: &mut impl std::fmt::Write) -> std::fmt::Result {
+        if self.all_ok() {
+            return w.write_str("ok");
+        }
+        let mut first = true;
+        for (name, st) in self.statuses() {
+            if st == SensorStatus::Ok {
+                continue;
+            }
+            if !first {
+                w.write_char(';')?;
+            }
+            first = false;
+            w.write_str(st.as_str())?;
+            w.write_char(':')?;
+            w.write_str(name)?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests;

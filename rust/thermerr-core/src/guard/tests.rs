@@ -1,0 +1,240 @@
+use serde_json::json;
+
+use super::*;
+
+/// An MLR model file y = 2·a + 3·b (+ 1) with inputs `inputs`, optionally with a guard.
+fn mlr(features: &[&str], coef: &[f64], inputs: &str, guard: Option<Value>) -> Value {
+    let mut v = json!({
+        "format_version": 1, "kind": "mlr", "n_features": features.len(),
+        "features": features, "target": "E_x", "inputs": inputs,
+        "model": {"coef": coef, "intercept": 1.0},
+    });
+    if let Some(g) = guard {
+        v["guard"] = g;
+    }
+    v
+}
+
+fn limits() -> Value {
+    json!({"min": 0.0, "max": 100.0, "max_rate": 1.0, "stuck_s": 50.0})
+}
+
+fn guarded(fallbacks: Value) -> GuardedPredictor {
+    let g = json!({"sensors": [limits(), limits()], "hold_s": 10.0, "step_s": 1.0,
+                   "fallbacks": fallbacks});
+    let text = mlr(&["T_a", "T_b"], &[2.0, 3.0], "absolute", Some(g)).to_string();
+    GuardedPredictor::new(Predictor::from_json(&text).unwrap())
+        .unwrap()
+        .unwrap()
+}
+
+fn status(g: &GuardedPredictor) -> String {
+    let mut s = String::new();
+    g.write_status(&mut s).unwrap();
+    s
+}
+
+/// A fallback without T_b: y = 4·a + 1.
+fn fallback_b() -> Value {
+    json!([{"without": "T_b", "model": mlr(&["T_a"], &[4.0], "absolute", None)}])
+}
+
+#[test]
+fn good_readings_pass_through_unchanged() {
+    let mut g = guarded(json!([]));
+    for k in 0..20 {
+        let (a, b) = (20.0 + 0.1 * k as f64, 30.0);
+        let y = g.step(Some(k as f64), &[a, b + 0.01 * k as f64]).unwrap();
+        assert_eq!(y, Some(2.0 * a + 3.0 * (b + 0.01 * k as f64) + 1.0));
+        assert_eq!(status(&g), "ok");
+    }
+}
+
+#[test]
+fn a_dropout_is_held_then_falls_back_then_recovers() {
+    let mut g = guarded(fallback_b());
+    assert_eq!(g.step(Some(0.0), &[20.0, 30.0]).unwrap(), Some(131.0));
+    // T_b missing for 10 s: held at 30
+    for t in 1..=11 {
+        let y = g.step(Some(t as f64), &[21.0, f64::NAN]).unwrap();
+        assert_eq!(y, Some(2.0 * 21.0 + 3.0 * 30.0 + 1.0), "t = {t}");
+        assert_eq!(status(&g), "held:T_b");
+    }
+    // beyond hold_s (10 s after the fault began at t = 1): the model without T_b
+    let y = g.step(Some(12.0), &[21.0, f64::NAN]).unwrap();
+    assert_eq!(y, Some(4.0 * 21.0 + 1.0));
+    assert_eq!(status(&g), "fallback:T_b");
+    // back: the full model again
+    let y = g.step(Some(13.0), &[21.0, 30.5]).unwrap();
+    assert_eq!(y, Some(2.0 * 21.0 + 3.0 * 30.5 + 1.0));
+    assert_eq!(status(&g), "ok");
+}
+
+#[test]
+fn without_a_fallback_the_last_output_is_frozen() {
+    let mut g = guarded(json!([]));
+    g.step(Some(0.0), &[20.0, 30.0]).unwrap();
+    g.step(Some(1.0), &[20.5, 30.0]).unwrap();
+    let before = 2.0 * 20.5 + 3.0 * 30.0 + 1.0;
+    for t in 2..30 {
+        let y = g.step(Some(t as f64), &[20.5 + 0.01 * t as f64, -273.0]).unwrap();
+        let expect = if t <= 12 {
+            2.0 * (20.5 + 0.01 * t as f64) + 3.0 * 30.0 + 1.0 // held T_b, live T_a
+        } else {
+            before + 0.01 * 12.0 * 2.0 // the last output before the hold ran out
+        };
+        assert!((y.unwrap() - expect).abs() < 1e-12, "t = {t}: {y:?} vs {expect}");
+        let want = if t <= 12 { "held:T_b" } else { "frozen:T_b" };
+        assert_eq!(status(&g), want, "t = {t}");
+    }
+}
+
+#[test]
+fn spikes_out_of_range_and_too_fast_are_held() {
+    let mut g = guarded(json!([]));
+    g.step(Some(0.0), &[20.0, 30.0]).unwrap();
+    // out of range (open thermocouple)
+    assert_eq!(g.step(Some(1.0), &[1372.0, 30.0]).unwrap(), Some(131.0));
+    assert_eq!(status(&g), "held:T_a");
+    // in range but 10 units in 1 s (max_rate 1 /s)
+    assert_eq!(g.step(Some(2.0), &[20.0, 40.0]).unwrap(), Some(131.0));
+    assert_eq!(status(&g), "held:T_b");
+    // a slow change passes: 2 units over the 3 s since the last good T_b
+    assert_eq!(g.step(Some(3.0), &[20.0, 32.0]).unwrap(), Some(137.0));
+    assert_eq!(status(&g), "ok");
+}
+
+#[test]
+fn a_stuck_sensor_is_detected_after_stuck_s() {
+    let mut g = guarded(fallback_b());
+    for t in 0..=50 {
+        g.step(Some(t as f64), &[20.0 + 0.01 * t as f64, 30.0]).unwrap();
+        assert_eq!(status(&g), "ok", "t = {t}");
+    }
+    g.step(Some(51.0), &[20.51, 30.0]).unwrap();
+    assert_eq!(status(&g), "held:T_b");
+    g.step(Some(62.0), &[20.62, 30.0]).unwrap();
+    assert_eq!(status(&g), "fallback:T_b");
+    g.step(Some(63.0), &[20.63, 30.1]).unwrap();
+    assert_eq!(status(&g), "ok");
+}
+
+#[test]
+fn two_sensors_out_freeze_and_nothing_is_predicted_before_a_first_good_reading() {
+    let mut g = guarded(fallback_b());
+    assert_eq!(g.step(Some(0.0), &[f64::NAN, 30.0]).unwrap(), None);
+    assert_eq!(status(&g), "waiting:T_a");
+    let y0 = g.step(Some(1.0), &[20.0, 30.0]).unwrap().unwrap();
+    for t in 2..40 {
+        g.step(Some(t as f64), &[f64::NAN, f64::NAN]).unwrap();
+    }
+    assert_eq!(status(&g), "frozen:T_a;frozen:T_b");
+    assert_eq!(g.step(Some(40.0), &[f64::NAN, f64::NAN]).unwrap(), Some(y0));
+}
+
+#[test]
+fn rows_without_times_use_step_s() {
+    let mut a = guarded(json!([]));
+    let mut b = guarded(json!([]));
+    let rows = [[20.0, 30.0], [f64::NAN, 30.0], [20.0, 30.0]];
+    for (k, r) in rows.iter().enumerate() {
+        assert_eq!(a.step(None, r).unwrap(), b.step(Some(k as f64), r).unwrap());
+        assert_eq!(status(&a), status(&b));
+    }
+}
+
+#[test]
+fn a_rise_model_falls_back_from_the_same_baseline() {
+    let g = json!({"sensors": [limits(), limits()], "hold_s": 0.0, "step_s": 1.0,
+                   "fallbacks": [{"without": "T_b",
+                                  "model": mlr(&["T_a"], &[4.0], "rise", None)}]});
+    let text = mlr(&["T_a", "T_b"], &[2.0, 3.0], "rise", Some(g)).to_string();
+    let mut p = GuardedPredictor::new(Predictor::from_json(&text).unwrap())
+        .unwrap()
+        .unwrap();
+    assert_eq!(p.step(Some(0.0), &[20.0, 30.0]).unwrap(), Some(1.0));
+    p.step(Some(1.0), &[21.0, f64::NAN]).unwrap(); // held (hold_s 0: fault begins now)
+    let y = p.step(Some(2.0), &[22.0, f64::NAN]).unwrap();
+    assert_eq!(status(&p), "fallback:T_b");
+    assert_eq!(y, Some(4.0 * (22.0 - 20.0) + 1.0));
+}
+
+#[test]
+fn limits_from_training_follow_the_documented_rules() {
+    // T_a: 20..24 rising 0.5 per 10 s step; T_b constant for the whole run
+    let n = 9;
+    let x: Vec<f64> = (0..n).flat_map(|i| [20.0 + 0.5 * i as f64, 30.0]).collect();
+    let t: Vec<f64> = (0..n).map(|i| 10.0 * i as f64).collect();
+    let g = Guard::from_training(&x, 2, Some(&t), 60.0).unwrap();
+    assert_eq!(g.step_s, 10.0);
+    assert_eq!(g.hold_s, 60.0);
+    let a = &g.sensors[0];
+    assert_eq!((a.min, a.max), (20.0 - 20.0, 24.0 + 20.0)); // span 4 < floor 20
+    assert!((a.max_rate - 5.0 * 0.05).abs() < 1e-12);
+    assert_eq!(a.stuck_s, STUCK_FLOOR_S);
+    let b = &g.sensors[1];
+    assert_eq!((b.min, b.max), (10.0, 50.0));
+    assert_eq!(b.max_rate, RATE_FLOOR);
+    assert_eq!(b.stuck_s, STUCK_FLOOR_S.max(2.0 * 80.0));
+    let e = Guard::from_training(&[1.0, f64::NAN, 2.0, 3.0], 2, None, 1.0).unwrap_err();
+    assert!(e.to_string().contains("row 0, feature 1"), "{e}");
+}
+
+#[test]
+fn bad_guards_are_refused_naming_the_part() {
+    let cases = [
+        (json!({"sensors": [limits()], "hold_s": 1.0, "step_s": 1.0}), "1 sensor limits for 2"),
+        (
+            json!({"sensors": [limits(), {"min": 5.0, "max": 1.0, "max_rate": 1.0, "stuck_s": 1.0}],
+                   "hold_s": 1.0, "step_s": 1.0}),
+            "limits of T_b",
+        ),
+        (
+            json!({"sensors": [limits(), limits()], "hold_s": -1.0, "step_s": 1.0}),
+            "hold_s",
+        ),
+        (
+            json!({"sensors": [limits(), limits()], "hold_s": 1.0, "step_s": 1.0,
+                   "fallbacks": [{"without": "T_c", "model": mlr(&["T_a"], &[1.0], "absolute", None)}]}),
+            "no feature \"T_c\"",
+        ),
+        (
+            json!({"sensors": [limits(), limits()], "hold_s": 1.0, "step_s": 1.0,
+                   "fallbacks": [{"without": "T_b", "model": mlr(&["T_b"], &[1.0], "absolute", None)}]}),
+            "expected the model's features without it",
+        ),
+        (
+            json!({"sensors": [limits(), limits()], "hold_s": 1.0, "step_s": 1.0,
+                   "fallbacks": [{"without": "T_b", "model": mlr(&["T_a"], &[1.0], "rise", None)}]}),
+            "from rise inputs",
+        ),
+        (
+            json!({"sensors": [limits(), limits()], "hold_s": 1.0, "step_s": 1.0, "extra": 1}),
+            "unknown field",
+        ),
+    ];
+    for (g, want) in cases {
+        let text = mlr(&["T_a", "T_b"], &[2.0, 3.0], "absolute", Some(g)).to_string();
+        let e = Artifact::from_json(&text).unwrap_err().to_string();
+        assert!(e.contains("guard") && e.contains(want), "{want}: {e}");
+    }
+}
+
+#[test]
+fn a_guard_survives_a_write_and_read() {
+    let text = mlr(
+        &["T_a", "T_b"],
+        &[2.0, 3.0],
+        "absolute",
+        Some(json!({"sensors": [limits(), limits()], "hold_s": 10.0, "step_s": 1.0,
+                    "fallbacks": fallback_b()})),
+    )
+    .to_string();
+    let a = Artifact::from_json(&text).unwrap();
+    let b = Artifact::from_json(&a.to_json().unwrap()).unwrap();
+    assert_eq!(a, b);
+    assert_eq!(b.header.guard.unwrap().fallbacks.len(), 1);
+    // a file without a guard is written without the key
+    let plain = Artifact::from_json(&mlr(&["T_a"], &[1.0], "absolute", None).to_string()).unwrap();
+    assert!(!plain.to_json().unwrap().contains("guard"));
+}
