@@ -97,7 +97,10 @@ impl Guard {
             }
         }
         if !(hold_s.is_finite() && hold_s >= 0.0) {
-            return Err(Error::param("hold_s", format!("must be >= 0 s, got {hold_s}")));
+            return Err(Error::param(
+                "hold_s",
+                format!("must be >= 0 s, got {hold_s}"),
+            ));
         }
         if let Some(i) = x.iter().position(|v| !v.is_finite()) {
             return Err(Error::Shape(format!(
@@ -187,10 +190,16 @@ impl Guard {
             }
         }
         if !(self.hold_s.is_finite() && self.hold_s >= 0.0) {
-            return Err(format_err(format!("guard: hold_s must be >= 0, got {}", self.hold_s)));
+            return Err(format_err(format!(
+                "guard: hold_s must be >= 0, got {}",
+                self.hold_s
+            )));
         }
         if !(self.step_s.is_finite() && self.step_s > 0.0) {
-            return Err(format_err(format!("guard: step_s must be > 0, got {}", self.step_s)));
+            return Err(format_err(format!(
+                "guard: step_s must be > 0, got {}",
+                self.step_s
+            )));
         }
         if !self.fallbacks.is_empty() {
             self.fallback_predictors(header)?;
@@ -207,9 +216,12 @@ impl Guard {
         let mut out: Vec<Option<(Predictor, Vec<usize>)>> = vec![None; features.len()];
         for (k, fb) in self.fallbacks.iter().enumerate() {
             let what = format!("guard: fallback {k} (without {})", fb.without);
-            let j = features.iter().position(|f| *f == fb.without).ok_or_else(|| {
-                format_err(format!("{what}: the model has no feature {:?}", fb.without))
-            })?;
+            let j = features
+                .iter()
+                .position(|f| *f == fb.without)
+                .ok_or_else(|| {
+                    format_err(format!("{what}: the model has no feature {:?}", fb.without))
+                })?;
             if out[j].is_some() {
                 return Err(format_err(format!("{what}: a second fallback without it")));
             }

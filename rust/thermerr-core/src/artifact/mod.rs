@@ -497,9 +497,9 @@ pub fn read_envelope(text: &str) -> Result<(String, usize, Header, Value)> {
         preprocessing: read_preprocessing(raw.preprocessing)?,
         guard: match raw.guard {
             None | Some(Value::Null) => None,
-            Some(v) => Some(
-                serde_json::from_value(v).map_err(|e| format_err(format!("guard: {e}")))?,
-            ),
+            Some(v) => {
+                Some(serde_json::from_value(v).map_err(|e| format_err(format!("guard: {e}")))?)
+            }
         },
     };
     Ok((raw.kind, n, header, raw.model))

@@ -77,13 +77,18 @@ fn without_a_fallback_the_last_output_is_frozen() {
     g.step(Some(1.0), &[20.5, 30.0]).unwrap();
     let before = 2.0 * 20.5 + 3.0 * 30.0 + 1.0;
     for t in 2..30 {
-        let y = g.step(Some(t as f64), &[20.5 + 0.01 * t as f64, -273.0]).unwrap();
+        let y = g
+            .step(Some(t as f64), &[20.5 + 0.01 * t as f64, -273.0])
+            .unwrap();
         let expect = if t <= 12 {
             2.0 * (20.5 + 0.01 * t as f64) + 3.0 * 30.0 + 1.0 // held T_b, live T_a
         } else {
             before + 0.01 * 12.0 * 2.0 // the last output before the hold ran out
         };
-        assert!((y.unwrap() - expect).abs() < 1e-12, "t = {t}: {y:?} vs {expect}");
+        assert!(
+            (y.unwrap() - expect).abs() < 1e-12,
+            "t = {t}: {y:?} vs {expect}"
+        );
         let want = if t <= 12 { "held:T_b" } else { "frozen:T_b" };
         assert_eq!(status(&g), want, "t = {t}");
     }
@@ -108,7 +113,8 @@ fn spikes_out_of_range_and_too_fast_are_held() {
 fn a_stuck_sensor_is_detected_after_stuck_s() {
     let mut g = guarded(fallback_b());
     for t in 0..=50 {
-        g.step(Some(t as f64), &[20.0 + 0.01 * t as f64, 30.0]).unwrap();
+        g.step(Some(t as f64), &[20.0 + 0.01 * t as f64, 30.0])
+            .unwrap();
         assert_eq!(status(&g), "ok", "t = {t}");
     }
     g.step(Some(51.0), &[20.51, 30.0]).unwrap();
@@ -183,7 +189,10 @@ fn limits_from_training_follow_the_documented_rules() {
 #[test]
 fn bad_guards_are_refused_naming_the_part() {
     let cases = [
-        (json!({"sensors": [limits()], "hold_s": 1.0, "step_s": 1.0}), "1 sensor limits for 2"),
+        (
+            json!({"sensors": [limits()], "hold_s": 1.0, "step_s": 1.0}),
+            "1 sensor limits for 2",
+        ),
         (
             json!({"sensors": [limits(), {"min": 5.0, "max": 1.0, "max_rate": 1.0, "stuck_s": 1.0}],
                    "hold_s": 1.0, "step_s": 1.0}),
@@ -226,8 +235,10 @@ fn a_guard_survives_a_write_and_read() {
         &["T_a", "T_b"],
         &[2.0, 3.0],
         "absolute",
-        Some(json!({"sensors": [limits(), limits()], "hold_s": 10.0, "step_s": 1.0,
-                    "fallbacks": fallback_b()})),
+        Some(
+            json!({"sensors": [limits(), limits()], "hold_s": 10.0, "step_s": 1.0,
+                    "fallbacks": fallback_b()}),
+        ),
     )
     .to_string();
     let a = Artifact::from_json(&text).unwrap();
