@@ -209,11 +209,11 @@ impl Guard {
 
     /// For each feature, the fallback model fitted without it (if there is one), with the
     /// positions of its features among the model's.
-    fn fallback_predictors(&self, header: &Header) -> Result<Vec<Option<(Predictor, Vec<usize>)>>> {
+    fn fallback_predictors(&self, header: &Header) -> Result<Vec<Option<Stand>>> {
         let features = header.features.as_ref().ok_or_else(|| {
             format_err("guard: fallbacks need the model's feature names (fit it on a run)")
         })?;
-        let mut out: Vec<Option<(Predictor, Vec<usize>)>> = vec![None; features.len()];
+        let mut out: Vec<Option<Stand>> = vec![None; features.len()];
         for (k, fb) in self.fallbacks.iter().enumerate() {
             let what = format!("guard: fallback {k} (without {})", fb.without);
             let j = features
@@ -260,6 +260,9 @@ impl Guard {
         Ok(out)
     }
 }
+
+/// A fallback's predictor and the positions of its features among the model's.
+type Stand = (Predictor, Vec<usize>);
 
 /// Whether a model can have fallback models: one whose prediction depends on the current
 /// sample only (apart from a rise baseline), as must the fallbacks themselves.
@@ -321,7 +324,7 @@ pub struct GuardedPredictor {
     main: Predictor,
     guard: Guard,
     names: Vec<String>,
-    fallbacks: Vec<Option<(Predictor, Vec<usize>)>>,
+    fallbacks: Vec<Option<Stand>>,
     sensors: Vec<SensorState>,
     x: Vec<f64>,
     xf: Vec<f64>,
