@@ -34,6 +34,8 @@ import _endurance as en  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 LINE = re.compile(rb"\d+,-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?(?:,[^,\n]+)*")
+GUARDED_LINE = re.compile(rb"\d+,-?\d+(?:\.\d+)?(?:[eE][-+]?\d+)?,"
+                          rb"(?:ok|(?:held|fallback|frozen):\w+(?:;(?:held|fallback|frozen):\w+)*)")
 SKIPPED = re.compile(rb"thermerr-edge: line (\d+): .+; skipped")
 SMALL = 10_000
 
@@ -47,8 +49,10 @@ def edge_binary() -> Path:
     return Path(meta["target_directory"]) / "release" / "thermerr-edge"
 
 
-def streamed(exe: Path, model: Path, csv: Path, faults: list[en.Fault], n_rows: int) -> dict:
-    rejected = {f.line for f in faults if f.rejects(set(en.TEMPS))}
+def streamed(exe: Path, model: Path, csv: Path, faults: list[en.Fault], n_rows: int, guard: bool = False) -> dict:
+    # with the sensor-fault guard only unreadable lines are rejected; the rest carry a status
+    rejected = {f.line for f in faults if (f.unreadable if guard else f.rejects(set(en.TEMPS)))}
+    line_re = GUARDED_LINE if guard else LINE
     n_lines = n_rows + sum(f.row is None for f in faults)
     s = en.stream(exe, model, csv, expect_lines=1 + n_lines - len(rejected))
     out = s.stdout.split(b"\n")
@@ -58,7 +62,8 @@ def streamed(exe: Path, model: Path, csv: Path, faults: list[en.Fault], n_rows: 
                 expected_rows=n_lines - len(rejected), rows_per_s=round(n_lines / s.wall_s), wall_s=round(s.wall_s, 3),
                 peak_rss_kib=s.peak_rss_kib, rejected=len(reported),
                 rejected_as_injected=all(reported) and {int(m.group(1)) for m in reported if m} == rejected,
-                well_formed=last == b"" and all(LINE.fullmatch(b) for b in body))
+                well_formed=last == b"" and all(line_re.fullmatch(b) for b in body),
+                held_or_fallback_rows=sum(not b.endswith(b",ok") for b in body) if guard else None)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -77,8 +82,9 @@ def main(argv: list[str] | None = None) -> None:
         en.write_run(d / "train.csv", 5_000, seed=1, faults=False)
         train = tr.read_run(d / "train.csv")
         models = {
-            "MLR": tr.MLR(),
-            "RBF k=20": tr.RBFNetwork(design="kmeans", n_centers=20, spread=3.0, seed=0),
+            "MLR": (tr.MLR(), False),
+            "MLR + guard": (tr.MLR(), True),
+            "RBF k=20": (tr.RBFNetwork(design="kmeans", n_centers=20, spread=3.0, seed=0), False),
         }
         faults = en.write_run(d / "week.csv", args.rows, seed=args.seed)
         en.write_run(d / "clean.csv", args.rows, seed=args.seed, faults=False)
@@ -87,11 +93,13 @@ def main(argv: list[str] | None = None) -> None:
         for f in faults:
             counts[f.kind] = counts.get(f.kind, 0) + 1
         print(json.dumps(dict(faults=counts, stuck_rows=sum(f.n for f in faults if f.kind == "stuck"))))
-        for name, m in models.items():
+        for name, (m, guard) in models.items():
             m.fit_run(train, "E_x", en.TEMPS, inputs="rise")
+            if guard:
+                tr.add_guard(m, train)
             path = m.save(d / "model.json")
-            week = streamed(exe, path, d / "week.csv", faults, args.rows)
-            ref = streamed(exe, path, d / "small.csv", small, SMALL)
+            week = streamed(exe, path, d / "week.csv", faults, args.rows, guard)
+            ref = streamed(exe, path, d / "small.csv", small, SMALL, guard)
             week["peak_rss_kib_10k_rows"] = ref["peak_rss_kib"]
             print(json.dumps(dict(model=name, kind="stream", **week)))
             r = subprocess.run([str(exe), str(path), str(d / "clean.csv"), "--bench-latency", str(args.rows)],

@@ -143,3 +143,41 @@ def test_peak_memory_does_not_grow_with_the_input(week, edge_bin: Path, tmp_path
     assert small.peak_rss_kib is not None and big.peak_rss_kib is not None
     assert 0 < small.peak_rss_kib < 64 * 1024
     assert abs(big.peak_rss_kib - small.peak_rss_kib) <= 1024, (small.peak_rss_kib, big.peak_rss_kib)
+
+
+def test_faulty_week_through_a_guarded_model(week, edge_bin: Path) -> None:
+    """The same faulty file through the model as `thermerr fit` writes it, with its sensor-fault
+    guard (limits learnt from the clean training run, a fallback without each sensor): only the
+    lines that cannot be read as a sample are rejected; every dropout, spike and stuck reading in
+    a feature column is a row the guard names in its status (and the stuck window, once longer
+    than its stuck time, too); no output strays beyond the training errors' size."""
+    d = week["dir"]
+    train = tr.read_run(d / "train.csv")
+    model = tr.MLR().fit_run(train, "E_x", en.TEMPS, inputs="rise")
+    tr.add_guard(model, train)
+    path = model.save(d / "guarded.json")
+    faults = week["faults"]
+    rejected = expected_rejected(faults, set(en.TEMPS), guard=True)
+    out = en.stream(edge_bin, path, d / "faulty.csv", expect_lines=1 + week["n_lines"] - len(rejected))
+    assert out.returncode == 0, out.stderr.decode(errors="replace")[-2000:]
+    lines = out.stdout.decode("ascii").split("\n")[:-1]
+    assert lines[0] == "time_s,E_x_pred,status"
+    rows = np.array([ln.split(",") for ln in lines[1:]])
+    for ln in lines[1:]:
+        t, y, st = ln.split(",")
+        assert NUMBER.fullmatch(t) and NUMBER.fullmatch(y) and STATUS.fullmatch(st), ln
+    err = out.stderr.decode("utf-8").splitlines()
+    reported = {int(m.group(1)) for m in map(SKIPPED.fullmatch, err) if m}
+    assert len(err) == len(reported) and reported == rejected
+    status = dict(zip(rows[:, 0].astype(int).tolist(), rows[:, 2].tolist()))
+    for f in faults:
+        if f.row is not None and f.column in en.TEMPS and f.kind in ("nan", "empty", "spike"):
+            assert status[f.row] != "ok" and f.column in status[f.row], (f, status[f.row])
+    stuck = [f for f in faults if f.kind == "stuck"]
+    assert stuck
+    for f in stuck:
+        flagged = [r for r in range(f.row, f.row + f.n) if status.get(r, "ok") != "ok"]
+        assert flagged, f  # hours of a repeated value: past the learnt stuck time
+    y = rows[:, 1].astype(float)
+    limit = 2 * np.abs(train["E_x"]).max() + 10
+    assert np.abs(y).max() < limit, (np.abs(y).max(), limit)
