@@ -10,7 +10,7 @@ use libfuzzer_sys::fuzz_target;
 use thermerr_edge::filter::LineFilter;
 use thermerr_edge::Predictor;
 
-const MODELS: [&str; 8] = [
+const MODELS: [&str; 9] = [
     include_str!("../../tests/fixtures/mlr_rise.json"),
     include_str!("../../tests/fixtures/rbf_ols_minmax_rise.json"),
     include_str!("../../tests/fixtures/rbf_exact_ago.json"),
@@ -19,6 +19,7 @@ const MODELS: [&str; 8] = [
     include_str!("../../tests/fixtures/greybp_rise.json"),
     include_str!("../../tests/fixtures/gm1n_rise.json"),
     include_str!("../../tests/fixtures/hybrid_rise.json"),
+    include_str!("../../tests/fixtures/mlr_guard.json"),
 ];
 
 fn predictors() -> &'static [Predictor] {
@@ -51,6 +52,17 @@ fuzz_target!(|data: &[u8]| {
     let Ok(mut filter) = LineFilter::new(&header, &p) else {
         return;
     };
+    // a model with a sensor-fault guard goes through the guarded path, as the CLI runs it
+    if let Ok(Some(mut g)) = p.guarded() {
+        let mut status = String::new();
+        for line in lines {
+            if filter.feed_guarded(&mut g, line).is_ok() {
+                status.clear();
+                let _ = g.write_status(&mut status);
+            }
+        }
+        return;
+    }
     for line in lines {
         if let Ok(Some(o)) = filter.feed(&mut p, line) {
             let _ = o.y;
