@@ -29,7 +29,7 @@ def rows(sizes=SIZES, repeat: int = 3) -> list[dict]:
     idx = np.random.default_rng(0).permutation(len(y))[:45]
     x, y = x[np.sort(idx)], y[np.sort(idx)]
     bounds = {"C": (0.1, 100.0), "gamma": (1e-3, 1.0)}
-    folds = tr.swarm._core.kfold(len(y), 5, 0)
+    folds = tr.kfold_split(len(y), 5, seed=0)  # the seed's shuffled folds, as (train, test)
     res = {}
 
     def ours():
@@ -44,7 +44,7 @@ def rows(sizes=SIZES, repeat: int = 3) -> list[dict]:
     from sklearn.model_selection import cross_val_score
     from sklearn.svm import SVR
 
-    cv = [(np.setdiff1d(np.arange(len(y)), f), np.asarray(f)) for f in folds]
+    cv = folds
 
     def objective(v):
         m = SVR(C=10 ** v[0], gamma=10 ** v[1])

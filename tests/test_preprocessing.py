@@ -56,7 +56,8 @@ def brute_force_bands(x, y, spreads, test):
 def test_spread_search_finds_the_minimum_of_the_curve():
     x, y = series(41, 1)
     grid = np.arange(1.0, 2.0, 0.05)
-    res = tr.spread_search(x, y, grid, progress=False)
+    # seed 001's own protocol (interleaved test samples); the time-ordered default: test_folds
+    res = tr.spread_search(x, y, grid, test_index=seed001_test_index(41), progress=False)
     expect = brute_force_bands(x, y, grid, seed001_test_index(41))
     np.testing.assert_allclose(res.bands, expect, rtol=1e-9)
     assert res.spread == pytest.approx(grid[int(np.argmin(expect))])

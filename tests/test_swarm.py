@@ -76,7 +76,7 @@ def test_cv_mse_equals_scikit_learn_cross_validation() -> None:
     x, y = seed004_like()
     folds = tr.swarm._core.kfold(45, 5, 7)
     cv = [(np.setdiff1d(np.arange(45), f), np.asarray(f)) for f in folds]
-    ours = tr.svr_cv_mse(x[:45], y[:45], folds, C=7.3465, gamma=0.0261)
+    ours = tr.svr_cv_mse(x[:45], y[:45], cv, C=7.3465, gamma=0.0261)
     ref = -cross_val_score(SkSVR(C=7.3465, gamma=0.0261), x[:45], y[:45], cv=cv,
                            scoring="neg_mean_squared_error").mean()
     # the same SMO on the same folds (see test_svr): equal to rounding of the fold sums

@@ -22,6 +22,7 @@ from .errors import (
 )
 from . import examples
 from .fcm import FuzzyCMeans
+from .folds import kfold_split, time_series_split
 from .grey import GM1N, BPNetwork, GreyBP
 from .guard import GuardedPrediction, add_guard, predict_guarded
 from .hybrid import HybridFilterNet
@@ -74,6 +75,8 @@ __all__ = [
     "tune_svr",
     "TuneResult",
     "svr_cv_mse",
+    "time_series_split",
+    "kfold_split",
     "key_thermal_stiffness",
     "StiffnessResult",
     "Machine",

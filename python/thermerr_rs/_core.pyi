@@ -217,14 +217,21 @@ def swarm_minimize(
     seed: int = 0,
     vectorized: bool = False,
 ) -> tuple[list[float], float, list[float], int]: ...
+_Splits = list[tuple[list[int], list[int]]]
+
 def kfold(n: int, k: int, seed: int | None = None) -> list[list[int]]: ...
+def kfold_splits(n: int, k: int, seed: int | None = None) -> _Splits: ...
+def time_series_split(
+    n: int, n_splits: int, *, gap: int = 0, test_size: int | None = None, max_train_size: int | None = None
+) -> _Splits: ...
+def check_splits(splits: _Splits, n: int) -> None: ...
 def svr_cv_mse(
-    x: _F64, y: _F64, folds: list[list[int]], *, c: float, gamma: float, epsilon: float = 0.1, tol: float = 1e-3
+    x: _F64, y: _F64, splits: _Splits, *, c: float, gamma: float, epsilon: float = 0.1, tol: float = 1e-3
 ) -> float: ...
 def tune_svr(
     x: _F64,
     y: _F64,
-    folds: list[list[int]],
+    splits: _Splits,
     *,
     method: str = "cso",
     c_bounds: tuple[float, float] = ...,  # (0.01, 1000.0)

@@ -142,10 +142,12 @@ def _make_svr(args: argparse.Namespace, run: Run, sensors: list[str]) -> Estimat
     from .swarm import tune_svr
 
     res = tune_svr(run.input_matrix(sensors, args.inputs), run[args.axis], method=args.tune, cv=args.cv,
-                   epsilon=args.epsilon, pop=args.pop, iters=args.iters, seed=args.seed,
-                   progress=_progress_enabled(args))
+                   cv_kind=args.cv_kind, gap=args.gap, epsilon=args.epsilon, pop=args.pop,
+                   iters=args.iters, seed=args.seed, progress=_progress_enabled(args))
+    how = (f"{args.cv} time-ordered splits (gap {args.gap})" if args.cv_kind == "time"
+           else f"{args.cv} shuffled folds")
     _say(args, f"{args.tune.upper()} search: C = {res.C:.5g}, gamma = {res.gamma:.5g}, "
-               f"{args.cv}-fold CV MSE {res.cv_mse:.4g} µm² ({res.n_evals} evaluations)")
+               f"CV MSE {res.cv_mse:.4g} µm² over {how} ({res.n_evals} evaluations)")
     return SVR(C=res.C, epsilon=args.epsilon, gamma=res.gamma)
 
 
@@ -410,8 +412,13 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--epsilon", type=float, default=0.1, help="SVR tube half-width in µm (default 0.1)")
     f.add_argument("--gamma", type=float, default=None, help="SVR RBF gamma (default: 'scale'; searched with --tune)")
     f.add_argument("--tune", choices=["cso", "pso"], default=None,
-                   help="search SVR C and gamma by k-fold CV MSE with chicken swarm or particle swarm (seed 004)")
-    f.add_argument("--cv", type=_positive_int, default=5, help="folds of the --tune search (default 5)")
+                   help="search SVR C and gamma by cross-validated MSE with chicken swarm or particle swarm (seed 004)")
+    f.add_argument("--cv", type=_positive_int, default=5, help="splits of the --tune search (default 5)")
+    f.add_argument("--cv-kind", choices=["time", "kfold"], default="time",
+                   help="time: each split trains on the samples before its test block (scikit-learn's "
+                        "TimeSeriesSplit, default); kfold: the seed's shuffled folds (trains on later samples too)")
+    f.add_argument("--gap", type=_nonneg_int, default=0,
+                   help="samples left out between training and test blocks of --cv-kind time (default 0)")
     f.add_argument("--pop", type=_positive_int, default=20, help="swarm population of --tune (default 20)")
     f.add_argument("--iters", type=_positive_int, default=100, help="swarm generations of --tune (default 100)")
     f.add_argument("--windows", type=_positive_int, nargs="+", default=[6, 8, 10], help="GM(1,N) windows of greybp (default 6 8 10)")

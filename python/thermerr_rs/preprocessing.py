@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import math
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
@@ -155,14 +155,16 @@ class AGORegressor(_Preprocessed, SequenceModel):
 
 @dataclass(frozen=True)
 class SpreadSearch:
-    """Result of :func:`spread_search`: the best spread, its held-out residual band, and the
-    band of every spread tried."""
+    """Result of :func:`spread_search`: the best spread, its held-out residual band, the band of
+    every spread tried, every held-out sample (``test_index``) and the (train, test) index pairs
+    used (``folds``)."""
 
     spread: float
     band: float
     spreads: F64
     bands: F64
     test_index: F64
+    folds: list[tuple[list[int], list[int]]] = field(default_factory=list, repr=False)
 
     def __str__(self) -> str:
         return f"best spread {self.spread:.4g}: held-out residual band {self.band:.4g} ({len(self.spreads)} spreads tried)"
@@ -179,20 +181,33 @@ def spread_search(
     y: Any,
     spreads: Any = None,
     *,
+    cv: Any = 5,
+    cv_kind: str = "time",
+    gap: int = 0,
     test_index: Any = None,
     design: str = "exact",
     progress: bool | None = None,
     **rbf_params: Any,
 ) -> SpreadSearch:
-    """Seed 001's protocol: min–max normalise and 1-AGO the whole series, train an RBF network on
-    the training samples of the accumulated series for every spread of the grid, predict the whole
-    accumulated series, restore it (IAGO, de-normalise), and keep the spread whose residual band
-    (max − min of measured − predicted) on the test samples is smallest.
+    """Seed 001's spread search, validated in time order: for every split of ``cv`` and every
+    spread of the grid, min–max normalise (by the training samples' ranges) and 1-AGO the series
+    from its start, train an RBF network on the training samples of the accumulated series,
+    predict the accumulated series, restore it (IAGO, de-normalise), and take the residual band
+    (max − min of measured − predicted) on the split's test samples; keep the spread whose band,
+    averaged over the splits, is smallest.
+
+    ``cv`` as in :func:`~thermerr_rs.tune_svr` (see :mod:`thermerr_rs.folds`): by default 5
+    time-ordered splits (scikit-learn's ``TimeSeriesSplit(5, gap=gap)``: every network is trained
+    on samples before the ones it is scored on); ``cv_kind="kfold"`` for shuffled folds, a
+    scikit-learn splitter, or (train, test) index pairs. ``test_index`` instead gives seed 001's
+    own protocol: one split, the given test samples (e.g. :func:`seed001_test_index`, ⌈n/2⌉
+    equally spaced samples) against all the others, normalised by the whole series' ranges —
+    interleaved, so it trains on samples after the ones it scores.
 
     ``spreads`` default: 1.0 to 3.0 in steps of 0.01 (the seed starts at 1.0 and finds 1.21).
-    ``test_index`` default: :func:`seed001_test_index`. A progress bar shows on a terminal unless
-    ``progress=False``.
+    A progress bar shows on a terminal unless ``progress=False``.
     """
+    from .folds import resolve_cv
     from .rbf import RBFNetwork
 
     x = as_matrix(X)
@@ -201,14 +216,26 @@ def spread_search(
     if grid.size == 0 or np.any(grid <= 0):
         raise ParameterError("spreads must be a non-empty grid of positive numbers")
     n = x.shape[0]
-    test = seed001_test_index(n) if test_index is None else np.asarray(test_index, dtype=np.int64)
-    if test.size == 0 or test.min() < 0 or test.max() >= n:
-        raise ParameterError(f"test_index must select rows within 0..{n - 1}")
-    train = np.setdiff1d(np.arange(n), test)
-    if train.size < 2:
-        raise ParameterError("too few training samples left")
-    xt, yt = MinMaxAGO.fit(x), MinMaxAGO.fit(yv)
-    x1, y1 = np.ascontiguousarray(xt.transform(x)), yt.transform(yv)
+    seed_protocol = test_index is not None
+    if seed_protocol:
+        test = np.asarray(test_index, dtype=np.int64)
+        if test.size == 0 or test.min() < 0 or test.max() >= n:
+            raise ParameterError(f"test_index must select rows within 0..{n - 1}")
+        train = np.setdiff1d(np.arange(n), test)
+        if train.size < 2:
+            raise ParameterError("too few training samples left")
+        folds = [([int(i) for i in train], [int(i) for i in test])]
+    else:
+        folds = resolve_cv(cv, n, X, cv_kind=cv_kind, gap=gap)
+        for f, (tr, _) in enumerate(folds):
+            if len(tr) < 2:
+                raise ParameterError(f"invalid parameter `cv`: fold {f}: too few training samples ({len(tr)})")
+    prepared = []
+    for tr, te in folds:
+        rows = slice(None) if seed_protocol else np.asarray(tr)
+        xt, yt = MinMaxAGO.fit(x[rows]), MinMaxAGO.fit(yv[rows])
+        prepared.append((np.asarray(tr), np.asarray(te), yt, np.ascontiguousarray(xt.transform(x)),
+                         yt.transform(yv)))
     show = sys.stderr.isatty() if progress is None else progress
     it: Any = grid
     if show:
@@ -217,9 +244,13 @@ def spread_search(
         it = tqdm(grid, desc="spread search", unit="spread")
     bands = np.empty(grid.size)
     for k, s in enumerate(it):
-        net = RBFNetwork(design=design, spread=float(s), **rbf_params).fit(x1[train], y1[train])
-        pred = yt.inverse(net.predict(x1))
-        r = yv[test] - pred[test]
-        bands[k] = float(r.max() - r.min())
+        per = []
+        for rows_train, rows_test, yt, x1, y1 in prepared:
+            net = RBFNetwork(design=design, spread=float(s), **rbf_params).fit(x1[rows_train], y1[rows_train])
+            pred = yt.inverse(net.predict(x1))
+            r = yv[rows_test] - pred[rows_test]
+            per.append(float(r.max() - r.min()))
+        bands[k] = float(np.mean(per))
     best = int(np.argmin(bands))
-    return SpreadSearch(float(grid[best]), float(bands[best]), grid, bands, test.astype(np.float64))
+    test = np.unique(np.concatenate([np.asarray(te, dtype=np.int64) for _, te in folds]))
+    return SpreadSearch(float(grid[best]), float(bands[best]), grid, bands, test.astype(np.float64), folds)

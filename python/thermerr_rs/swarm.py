@@ -13,6 +13,7 @@ import numpy as np
 from . import _core
 from ._arrays import F64, as_matrix, as_vector
 from .errors import ParameterError
+from .folds import Splits, resolve_cv
 from .svr import SVR
 
 Objective = str | Callable[[F64], float] | Callable[[F64], Sequence[float]]
@@ -93,7 +94,7 @@ def pso(
 class TuneResult:
     """Outcome of :func:`tune_svr`: the best ``C`` and ``gamma``, their cross-validated MSE, the
     best CV MSE after each generation, the evaluations spent, the SVR refitted on all the data,
-    and the folds used."""
+    and the (train, test) index pairs used (``folds``; pass them back as ``cv``)."""
 
     C: float
     gamma: float
@@ -101,7 +102,7 @@ class TuneResult:
     history: F64
     n_evals: int
     model: SVR
-    folds: list[list[int]] = field(repr=False)
+    folds: Splits = field(repr=False)
 
 
 def tune_svr(
@@ -109,7 +110,9 @@ def tune_svr(
     y: Any,
     *,
     method: str = "cso",
-    cv: int | Sequence[Sequence[int]] = 5,
+    cv: Any = 5,
+    cv_kind: str = "time",
+    gap: int = 0,
     bounds: dict[str, tuple[float, float]] | None = None,
     scale: str = "log",
     epsilon: float = 0.1,
@@ -120,10 +123,15 @@ def tune_svr(
     progress: bool | None = None,
     **swarm: Any,
 ) -> TuneResult:
-    """Seed 004: search (C, γ) of an RBF ε-SVR minimising the k-fold cross-validated MSE.
+    """Seed 004: search (C, γ) of an RBF ε-SVR minimising the cross-validated MSE.
 
-    ``method`` ``"cso"`` or ``"pso"``; ``cv`` a number of folds (shuffled by ``seed``) or explicit
-    test-index folds; ``bounds`` ``{"C": (lo, hi), "gamma": (lo, hi)}`` (default C in
+    ``method`` ``"cso"`` or ``"pso"``. ``cv`` (see :mod:`thermerr_rs.folds`): an int ``k`` is
+    ``k`` time-ordered splits (scikit-learn's ``TimeSeriesSplit(k, gap=gap)``: each model trained
+    on the samples before its test block, ``gap`` samples left out between them) — or, with
+    ``cv_kind="kfold"``, the seed's ``k`` shuffled folds (shuffled by ``seed``, each trained on the
+    complement, i.e. also on later samples: not an honest error for a run); a scikit-learn
+    splitter (anything with ``.split(X)``) or an iterable of ``(train, test)`` index arrays is used
+    as it is. ``bounds`` ``{"C": (lo, hi), "gamma": (lo, hi)}`` (default C in
     [0.01, 1000], γ in [1e-4, 10]); ``scale="log"`` searches log10 of both, ``"linear"`` the values
     as they are (the seed's). All population × fold SVR fits of a generation run natively in
     parallel without the GIL. A progress bar shows on a terminal unless ``progress=False``. Extra
@@ -138,10 +146,7 @@ def tune_svr(
         if unknown:
             raise ParameterError(f"bounds has unknown keys {sorted(unknown)} (known: C, gamma)")
         b.update(bounds)
-    if isinstance(cv, int):
-        folds = _core.kfold(x.shape[0], cv, seed)
-    else:
-        folds = [[int(i) for i in f] for f in cv]
+    folds = resolve_cv(cv, x.shape[0], X, cv_kind=cv_kind, gap=gap, seed=seed)
     known = {"G": "g", "roosters": "roosters", "hens": "hens", "fl": "fl", "w": "w", "c1": "c1",
              "c2": "c2", "vmax_frac": "vmax_frac"}
     extra = {}
@@ -174,11 +179,14 @@ def tune_svr(
     return TuneResult(float(c), float(g), float(mse), np.asarray(hist), int(n), model, folds)
 
 
-def svr_cv_mse(X: Any, y: Any, folds: Sequence[Sequence[int]], *, C: float, gamma: float,
-               epsilon: float = 0.1, tol: float = 1e-3) -> float:
-    """Mean over ``folds`` (test-index sets) of the held-out MSE of an RBF ε-SVR — the objective
-    :func:`tune_svr` minimises."""
+def svr_cv_mse(X: Any, y: Any, cv: Any = 5, *, C: float, gamma: float, epsilon: float = 0.1,
+               tol: float = 1e-3, cv_kind: str = "time", gap: int = 0, seed: int = 0) -> float:
+    """Mean over the splits of ``cv`` (as in :func:`tune_svr`; e.g. ``TuneResult.folds``) of the
+    held-out MSE of an RBF ε-SVR trained on each split's training set — the objective
+    :func:`tune_svr` minimises, and scikit-learn's ``-cross_val_score(SVR(...), X, y, cv=...,
+    scoring="neg_mean_squared_error").mean()``."""
     x = as_matrix(X)
     yv = as_vector(y, n=x.shape[0])
-    return float(_core.svr_cv_mse(x, yv, [[int(i) for i in f] for f in folds], c=float(C),
+    folds = resolve_cv(cv, x.shape[0], X, cv_kind=cv_kind, gap=gap, seed=seed)
+    return float(_core.svr_cv_mse(x, yv, folds, c=float(C),
                                   gamma=float(gamma), epsilon=float(epsilon), tol=float(tol)))

@@ -1,5 +1,7 @@
 //! Hyper-parameter search of an ε-SVR (seed 004): chicken swarm optimisation (or PSO) over
-//! (C, γ), minimising the k-fold cross-validated mean squared error. The objective is evaluated
+//! (C, γ), minimising the cross-validated mean squared error over explicit (train, test) splits:
+//! time-ordered ones ([`time_series_split`], scikit-learn's `TimeSeriesSplit`) for runs, or the
+//! shuffled k-fold ones of the seed ([`kfold_splits`]). The objective is evaluated
 //! natively: each generation's population × folds SVR fits run in parallel (rayon).
 
 use rand::seq::SliceRandom;
@@ -51,8 +53,19 @@ pub struct TuneResult {
     pub model: SvrModel,
 }
 
+/// One cross-validation split: the samples an SVR is trained on and those it is scored on.
+/// Rows are taken in the order the indices are given (as scikit-learn's `X[train]`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Split {
+    pub train: Vec<usize>,
+    pub test: Vec<usize>,
+}
+
 /// Test-index sets of k folds: sizes ⌈n/k⌉ for the first n mod k folds and ⌊n/k⌋ for the rest
 /// (as scikit-learn's `KFold`), over the samples in order, or shuffled by `seed`.
+///
+/// Not for time series: a fold's complement trains on samples after its test block. See
+/// [`time_series_split`].
 pub fn kfold(n: usize, k: usize, seed: Option<u64>) -> Result<Vec<Vec<usize>>> {
     if k < 2 || k > n {
         return Err(Error::param(
@@ -72,6 +85,84 @@ pub fn kfold(n: usize, k: usize, seed: Option<u64>) -> Result<Vec<Vec<usize>>> {
         start += len;
     }
     Ok(out)
+}
+
+/// The [`kfold`] folds as (train, test) splits: each test set in increasing index order, its
+/// training set the complement in increasing order (the rows the k-fold search has always used).
+pub fn kfold_splits(n: usize, k: usize, seed: Option<u64>) -> Result<Vec<Split>> {
+    Ok(complement_splits(&kfold(n, k, seed)?, n))
+}
+
+/// Test-index folds as (train, test) splits, each training set the complement of its test set;
+/// both in increasing index order. Indices `>= n` are dropped here: validate with
+/// [`check_folds`] first when the folds come from outside.
+pub fn complement_splits(folds: &[Vec<usize>], n: usize) -> Vec<Split> {
+    folds
+        .iter()
+        .map(|test| {
+            let mut is_test = vec![false; n];
+            test.iter()
+                .filter(|&&i| i < n)
+                .for_each(|&i| is_test[i] = true);
+            let (test, train): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| is_test[i]);
+            Split { train, test }
+        })
+        .collect()
+}
+
+/// Time-ordered splits, index for index those of scikit-learn's
+/// `TimeSeriesSplit(n_splits, gap=gap, test_size=test_size, max_train_size=max_train_size)`:
+/// `n_splits` consecutive test blocks of `test_size` samples (default ⌊n/(n_splits+1)⌋) ending
+/// at the last sample; each training set the samples before its test block less the `gap`
+/// samples just before it, the last `max_train_size` of them if given. `max_train_size` 0 means
+/// no limit, as in scikit-learn. Every training index is below every test index of its split.
+pub fn time_series_split(
+    n: usize,
+    n_splits: usize,
+    gap: usize,
+    test_size: Option<usize>,
+    max_train_size: Option<usize>,
+) -> Result<Vec<Split>> {
+    if n_splits < 2 {
+        return Err(Error::param(
+            "cv",
+            format!("need at least 2 time-ordered splits, got {n_splits}"),
+        ));
+    }
+    let n_folds = n_splits + 1;
+    let test_size = test_size.unwrap_or(n / n_folds);
+    if test_size == 0 && n_folds <= n {
+        return Err(Error::param("cv", "test_size must be at least 1"));
+    }
+    if n_folds > n {
+        return Err(Error::param(
+            "cv",
+            format!("{n_splits} time-ordered splits need at least {n_folds} samples, got {n}"),
+        ));
+    }
+    if n <= gap.saturating_add(test_size.saturating_mul(n_splits)) {
+        return Err(Error::param(
+            "cv",
+            format!(
+                "too many splits ({n_splits}) for {n} samples with test_size {test_size} and gap {gap}"
+            ),
+        ));
+    }
+    let first = n - n_splits * test_size;
+    Ok((0..n_splits)
+        .map(|s| {
+            let test_start = first + s * test_size;
+            let train_end = test_start - gap;
+            let train_start = match max_train_size {
+                Some(m) if m > 0 && m < train_end => train_end - m,
+                _ => 0,
+            };
+            Split {
+                train: (train_start..train_end).collect(),
+                test: (test_start..test_start + test_size).collect(),
+            }
+        })
+        .collect())
 }
 
 /// Checks that `folds` are disjoint, non-empty test sets of valid sample indices.
@@ -100,6 +191,41 @@ pub fn check_folds(folds: &[Vec<usize>], n: usize) -> Result<()> {
     Ok(())
 }
 
+/// Checks explicit splits over `n` samples: at least one; in each, a non-empty training set and
+/// a non-empty test set, every index below `n`, no index in both. The error names the fold.
+pub fn check_splits(splits: &[Split], n: usize) -> Result<()> {
+    if splits.is_empty() {
+        return Err(Error::param("cv", "need at least one (train, test) split"));
+    }
+    let mut in_train = vec![false; n];
+    for (f, s) in splits.iter().enumerate() {
+        for (name, set) in [("training", &s.train), ("test", &s.test)] {
+            if set.is_empty() {
+                return Err(Error::param(
+                    "cv",
+                    format!("fold {f}: the {name} set is empty"),
+                ));
+            }
+            if let Some(&i) = set.iter().find(|&&i| i >= n) {
+                return Err(Error::param(
+                    "cv",
+                    format!("fold {f}: {name} index {i} is out of range for {n} samples"),
+                ));
+            }
+        }
+        s.train.iter().for_each(|&i| in_train[i] = true);
+        let both = s.test.iter().find(|&&i| in_train[i]).copied();
+        s.train.iter().for_each(|&i| in_train[i] = false);
+        if let Some(i) = both {
+            return Err(Error::param(
+                "cv",
+                format!("fold {f}: index {i} is in both the training and the test set"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Training and test sets of one fold.
 struct Fold {
     x_train: Vec<f64>,
@@ -108,29 +234,23 @@ struct Fold {
     y_test: Vec<f64>,
 }
 
-fn split(x: Samples<'_>, y: &[f64], folds: &[Vec<usize>]) -> Vec<Fold> {
-    let n = x.nrows();
-    folds
+fn split(x: Samples<'_>, y: &[f64], splits: &[Split]) -> Vec<Fold> {
+    let gather = |idx: &[usize]| -> (Vec<f64>, Vec<f64>) {
+        let mut xs = Vec::with_capacity(idx.len() * x.ncols());
+        idx.iter().for_each(|&i| xs.extend_from_slice(x.row(i)));
+        (xs, idx.iter().map(|&i| y[i]).collect())
+    };
+    splits
         .iter()
-        .map(|test| {
-            let mut is_test = vec![false; n];
-            test.iter().for_each(|&i| is_test[i] = true);
-            let mut f = Fold {
-                x_train: Vec::new(),
-                y_train: Vec::new(),
-                x_test: Vec::new(),
-                y_test: Vec::new(),
-            };
-            for i in 0..n {
-                if is_test[i] {
-                    f.x_test.extend_from_slice(x.row(i));
-                    f.y_test.push(y[i]);
-                } else {
-                    f.x_train.extend_from_slice(x.row(i));
-                    f.y_train.push(y[i]);
-                }
+        .map(|s| {
+            let (x_train, y_train) = gather(&s.train);
+            let (x_test, y_test) = gather(&s.test);
+            Fold {
+                x_train,
+                y_train,
+                x_test,
+                y_test,
             }
-            f
         })
         .collect()
 }
@@ -156,13 +276,14 @@ fn fold_mse(f: &Fold, d: usize, p: &SvrParams) -> f64 {
     }
 }
 
-/// Mean over folds of the held-out MSE of an SVR with parameters `p` (as scikit-learn's
-/// `cross_val_score(..., scoring="neg_mean_squared_error")`, sign flipped).
-pub fn cv_mse(x: Samples<'_>, y: &[f64], folds: &[Vec<usize>], p: &SvrParams) -> Result<f64> {
+/// Mean over splits of the held-out MSE of an SVR with parameters `p` trained on each split's
+/// training set (as scikit-learn's `cross_val_score(..., cv=splits,
+/// scoring="neg_mean_squared_error")`, sign flipped).
+pub fn cv_mse(x: Samples<'_>, y: &[f64], splits: &[Split], p: &SvrParams) -> Result<f64> {
     x.require_finite("X")?;
     check_target(y, x.nrows())?;
-    check_folds(folds, x.nrows())?;
-    let parts = split(x, y, folds);
+    check_splits(splits, x.nrows())?;
+    let parts = split(x, y, splits);
     let d = x.ncols();
     Ok(parts.par_iter().map(|f| fold_mse(f, d, p)).sum::<f64>() / parts.len() as f64)
 }
@@ -204,21 +325,23 @@ impl TuneParams {
     }
 }
 
-/// Searches (C, γ) minimising the k-fold CV MSE over `folds`, then refits on all the data.
+/// Searches (C, γ) minimising the mean held-out MSE over `splits` (time-ordered ones from
+/// [`time_series_split`], shuffled k-fold ones from [`kfold_splits`], or any checked by
+/// [`check_splits`]), then refits on all the data.
 /// `progress(generation, best_so_far)` is called after the initial population (generation 0) and
 /// after every generation (1..=iters).
 pub fn tune_svr(
     x: Samples<'_>,
     y: &[f64],
-    folds: &[Vec<usize>],
+    splits: &[Split],
     params: &TuneParams,
     mut progress: impl FnMut(usize, f64),
 ) -> Result<TuneResult> {
     x.require_finite("X")?;
     check_target(y, x.nrows())?;
-    check_folds(folds, x.nrows())?;
+    check_splits(splits, x.nrows())?;
     let bounds = params.bounds()?;
-    let parts = split(x, y, folds);
+    let parts = split(x, y, splits);
     let d = x.ncols();
     let mut generation = 0usize;
     let mut best = f64::INFINITY;
@@ -281,6 +404,128 @@ mod tests {
         assert!(kfold(3, 5, None).is_err());
     }
 
+    fn pairs(s: &[Split]) -> Vec<(Vec<usize>, Vec<usize>)> {
+        s.iter()
+            .map(|s| (s.train.clone(), s.test.clone()))
+            .collect()
+    }
+
+    #[test]
+    fn time_series_split_equals_scikit_learn() {
+        // TimeSeriesSplit(3).split(range(10)), scikit-learn 1.9.1
+        assert_eq!(
+            pairs(&time_series_split(10, 3, 0, None, None).unwrap()),
+            vec![
+                ((0..4).collect(), vec![4, 5]),
+                ((0..6).collect(), vec![6, 7]),
+                ((0..8).collect(), vec![8, 9]),
+            ]
+        );
+        // TimeSeriesSplit(3, gap=2, test_size=2, max_train_size=3).split(range(10))
+        assert_eq!(
+            pairs(&time_series_split(10, 3, 2, Some(2), Some(3)).unwrap()),
+            vec![
+                (vec![0, 1], vec![4, 5]),
+                (vec![1, 2, 3], vec![6, 7]),
+                (vec![3, 4, 5], vec![8, 9]),
+            ]
+        );
+        // max_train_size=0 is no limit in scikit-learn
+        assert_eq!(
+            time_series_split(7, 2, 0, None, Some(0)).unwrap(),
+            time_series_split(7, 2, 0, None, None).unwrap()
+        );
+        for (n, k, gap, ts) in [
+            (5, 5, 0, None),
+            (10, 1, 0, None),
+            (10, 3, 4, None),
+            (10, 3, 0, Some(0)),
+            (10, 3, 1, Some(3)),
+        ] {
+            let e = time_series_split(n, k, gap, ts, None).unwrap_err();
+            assert!(matches!(e, Error::InvalidParam { name: "cv", .. }), "{e}");
+        }
+    }
+
+    #[test]
+    fn time_splits_train_only_before_the_test_block() {
+        for n in 6..40 {
+            for k in 2..5 {
+                for gap in 0..3 {
+                    let Ok(s) = time_series_split(n, k, gap, None, Some(n / 3)) else {
+                        continue;
+                    };
+                    check_splits(&s, n).unwrap();
+                    for sp in &s {
+                        assert!(
+                            sp.train.iter().max().unwrap() + gap < *sp.test.iter().min().unwrap()
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn kfold_splits_are_the_complements_in_order() {
+        let s = kfold_splits(17, 5, Some(3)).unwrap();
+        let f = kfold(17, 5, Some(3)).unwrap();
+        for (sp, test) in s.iter().zip(&f) {
+            let mut t = test.clone();
+            t.sort();
+            assert_eq!(sp.test, t);
+            assert_eq!(
+                sp.train,
+                (0..17).filter(|i| !t.contains(i)).collect::<Vec<_>>()
+            );
+        }
+        check_splits(&s, 17).unwrap();
+    }
+
+    #[test]
+    fn bad_splits_name_the_fold() {
+        let ok = Split {
+            train: vec![0, 1],
+            test: vec![2],
+        };
+        let cases = [
+            (
+                Split {
+                    train: vec![0, 1],
+                    test: vec![],
+                },
+                "fold 1: the test set is empty",
+            ),
+            (
+                Split {
+                    train: vec![],
+                    test: vec![3],
+                },
+                "fold 1: the training set is empty",
+            ),
+            (
+                Split {
+                    train: vec![0, 1],
+                    test: vec![1, 2],
+                },
+                "fold 1: index 1 is in both",
+            ),
+            (
+                Split {
+                    train: vec![0, 9],
+                    test: vec![2],
+                },
+                "fold 1: training index 9 is out of range",
+            ),
+        ];
+        for (bad, msg) in cases {
+            let e = check_splits(&[ok.clone(), bad], 5).unwrap_err();
+            assert!(matches!(e, Error::InvalidParam { name: "cv", .. }));
+            assert!(e.to_string().contains(msg), "{e}");
+        }
+        assert!(check_splits(&[], 5).is_err());
+    }
+
     #[test]
     fn tuning_finds_a_better_cv_error_than_the_corners_and_is_deterministic() {
         let n = 45;
@@ -295,7 +540,7 @@ mod tests {
             .map(|r| 3.0 * r[0] + r[1] * r[1] - r[2])
             .collect();
         let s = Samples::new(&x, n, 4).unwrap();
-        let folds = kfold(n, 5, Some(1)).unwrap();
+        let folds = kfold_splits(n, 5, Some(1)).unwrap();
         let tp = TuneParams {
             svr: SvrParams::default(),
             c_bounds: (0.01, 100.0),

@@ -194,15 +194,56 @@ fn kfold(n: usize, k: usize, seed: Option<u64>) -> PyResult<Vec<Vec<usize>>> {
     Ok(tune::kfold(n, k, seed).map_err(PyErrWrap)?)
 }
 
-/// Mean k-fold CV MSE of an SVR (C, gamma) over the given test folds.
+type Pairs = Vec<(Vec<usize>, Vec<usize>)>;
+
+fn to_pairs(s: Vec<tune::Split>) -> Pairs {
+    s.into_iter().map(|s| (s.train, s.test)).collect()
+}
+
+fn from_pairs(p: Pairs) -> Vec<tune::Split> {
+    p.into_iter()
+        .map(|(train, test)| tune::Split { train, test })
+        .collect()
+}
+
+/// The `kfold` folds as (train, test) pairs, training sets the complements (both sorted).
 #[pyfunction]
-#[pyo3(signature = (x, y, folds, *, c, gamma, epsilon = 0.1, tol = 1e-3))]
+#[pyo3(signature = (n, k, seed = None))]
+fn kfold_splits(n: usize, k: usize, seed: Option<u64>) -> PyResult<Pairs> {
+    Ok(to_pairs(tune::kfold_splits(n, k, seed).map_err(PyErrWrap)?))
+}
+
+/// scikit-learn's `TimeSeriesSplit(n_splits, gap=, test_size=, max_train_size=)` over `n`
+/// samples, as (train, test) pairs.
+#[pyfunction]
+#[pyo3(signature = (n, n_splits, *, gap = 0, test_size = None, max_train_size = None))]
+fn time_series_split(
+    n: usize,
+    n_splits: usize,
+    gap: usize,
+    test_size: Option<usize>,
+    max_train_size: Option<usize>,
+) -> PyResult<Pairs> {
+    Ok(to_pairs(
+        tune::time_series_split(n, n_splits, gap, test_size, max_train_size).map_err(PyErrWrap)?,
+    ))
+}
+
+/// Checks (train, test) pairs over `n` samples (raises ParameterError naming the fold).
+#[pyfunction]
+fn check_splits(splits: Pairs, n: usize) -> PyResult<()> {
+    Ok(tune::check_splits(&from_pairs(splits), n).map_err(PyErrWrap)?)
+}
+
+/// Mean held-out MSE of an SVR (C, gamma) over the given (train, test) splits.
+#[pyfunction]
+#[pyo3(signature = (x, y, splits, *, c, gamma, epsilon = 0.1, tol = 1e-3))]
 #[allow(clippy::too_many_arguments)]
 fn svr_cv_mse(
     py: Python<'_>,
     x: PyReadonlyArray2<'_, f64>,
     y: PyReadonlyArray1<'_, f64>,
-    folds: Vec<Vec<usize>>,
+    splits: Pairs,
     c: f64,
     gamma: f64,
     epsilon: f64,
@@ -214,20 +255,21 @@ fn svr_cv_mse(
         .epsilon(epsilon)
         .tol(tol)
         .gamma(thermerr_core::svr::Gamma::Value(gamma));
-    crate::detach(py, || tune::cv_mse(xs, ys, &folds, &p))
+    let splits = from_pairs(splits);
+    crate::detach(py, || tune::cv_mse(xs, ys, &splits, &p))
 }
 
-/// Native CSO/PSO search of (C, gamma) by k-fold CV MSE; returns
+/// Native CSO/PSO search of (C, gamma) by the CV MSE over (train, test) splits; returns
 /// (C, gamma, cv_mse, history, n_evals, model). `progress(generation, best)` is called after
 /// each generation (with the GIL), if given.
 #[pyfunction]
-#[pyo3(signature = (x, y, folds, *, method = "cso", c_bounds = (0.01, 1000.0), gamma_bounds = (1e-4, 10.0), scale = "log", epsilon = 0.1, tol = 1e-3, pop = 20, iters = 100, g = 10, roosters = 0.2, hens = 0.6, fl = (0.4, 1.0), w = 0.7298, c1 = 1.49618, c2 = 1.49618, vmax_frac = 0.2, seed = 0, progress = None))]
+#[pyo3(signature = (x, y, splits, *, method = "cso", c_bounds = (0.01, 1000.0), gamma_bounds = (1e-4, 10.0), scale = "log", epsilon = 0.1, tol = 1e-3, pop = 20, iters = 100, g = 10, roosters = 0.2, hens = 0.6, fl = (0.4, 1.0), w = 0.7298, c1 = 1.49618, c2 = 1.49618, vmax_frac = 0.2, seed = 0, progress = None))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn tune_svr(
     py: Python<'_>,
     x: PyReadonlyArray2<'_, f64>,
     y: PyReadonlyArray1<'_, f64>,
-    folds: Vec<Vec<usize>>,
+    splits: Pairs,
     method: &str,
     c_bounds: (f64, f64),
     gamma_bounds: (f64, f64),
@@ -272,8 +314,9 @@ fn tune_svr(
         search,
     };
     let (xs, ys) = (samples(&x)?, slice1(&y)?);
+    let splits = from_pairs(splits);
     let r = crate::detach(py, || {
-        tune::tune_svr(xs, ys, &folds, &tp, |gen, best| {
+        tune::tune_svr(xs, ys, &splits, &tp, |gen, best| {
             if let Some(cb) = &progress {
                 Python::attach(|py| {
                     // a failing progress callback must not stop the search, but an
@@ -300,6 +343,9 @@ fn tune_svr(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(swarm_minimize, m)?)?;
     m.add_function(wrap_pyfunction!(kfold, m)?)?;
+    m.add_function(wrap_pyfunction!(kfold_splits, m)?)?;
+    m.add_function(wrap_pyfunction!(time_series_split, m)?)?;
+    m.add_function(wrap_pyfunction!(check_splits, m)?)?;
     m.add_function(wrap_pyfunction!(svr_cv_mse, m)?)?;
     m.add_function(wrap_pyfunction!(tune_svr, m)?)?;
     Ok(())
