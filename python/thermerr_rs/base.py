@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, ClassVar, TypeVar
 
@@ -103,6 +104,7 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
                    inputs: str = "absolute") -> E:
         self.n_features_in_ = x.shape[1]
         self.guard_ = None  # a guard learnt on an earlier fit no longer applies
+        self.history_ = None  # fit_run sets it after fitting with a history
         self.feature_names_in_ = names
         self.target_name_ = target
         self.inputs_ = inputs
@@ -123,16 +125,26 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         run by the library itself, so no feature-name warning)."""
         return self._predict(self._check_X(x, self.feature_names_in_))
 
-    def fit_run(self: E, run: Any, target: str, features: list[str], *, inputs: str = "absolute") -> E:
+    def fit_run(self: E, run: Any, target: str, features: list[str], *, inputs: str = "absolute",
+                history: Sequence[float] | None = None) -> E:
         """Fit on the named columns of a :class:`thermerr_rs.Run`.
 
         ``inputs="rise"`` models the error from each sensor's rise since the run's first sample
         (the error is itself relative to the run's start), which carries over between runs that
         start at different shop temperatures; ``"absolute"`` uses the readings as they are.
+
+        ``history`` (time constants in seconds, e.g. ``[900, 3600]``): the model also reads each
+        sensor's rise over about the last τ seconds (the reading minus a first-order low-pass of
+        it), so that a static model sees how the machine got where it is. Recorded in the model
+        file; ``thermerr-edge`` keeps the filters as state. The arithmetic is the core's
+        (``thermerr_core::artifact::History``).
         """
         run.check_fit_columns(target, list(features))
-        return self._fit_checked(run.input_matrix(features, inputs), run[target], names=list(features),
-                                 target=target, inputs=inputs)
+        hist = _history(history, run.time_s)
+        x = run_inputs(run, list(features), inputs, hist)
+        self._fit_checked(x, run[target], names=list(features), target=target, inputs=inputs)
+        self.history_ = hist
+        return self
 
     def predict_run(self, run: Any, *, shape: Any = None) -> F64:
         """Predict a run from the columns (and input form) the model was fitted on.
@@ -151,8 +163,7 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         self._check_fitted()
         if not self.feature_names_in_:
             raise ModelFormatError("this model does not record its feature columns; use predict(X)")
-        x: F64 = run.input_matrix(self.feature_names_in_, self.inputs_)
-        return x
+        return run_inputs(run, self.feature_names_in_, self.inputs_, getattr(self, "history_", None))
 
     def _check_fitted(self) -> None:
         if self._inner is None:
@@ -200,6 +211,7 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         """The model file's text; the core validates the model before it writes it."""
         self._check_fitted()
         head = self._header()
+        head["history"] = getattr(self, "history_", None)  # fit_run(history=...)
         head["guard"] = getattr(self, "guard_", None)  # thermerr_rs.add_guard
         try:
             header = json.dumps(head, allow_nan=False)
@@ -301,6 +313,25 @@ def _jsonable(v: Any) -> Any:
     return v
 
 
+def _history(taus: Sequence[float] | None, time_s: F64) -> dict[str, Any] | None:
+    """The model file's ``history`` entry for time constants ``taus`` on a run sampled at
+    ``time_s`` (``step_s``: its median step, used where a stream has no times)."""
+    if taus is None:
+        return None
+    tau = [float(t) for t in taus]
+    step = float(np.median(np.diff(time_s))) if len(time_s) > 1 else 1.0
+    return {"tau_s": tau, "step_s": step}
+
+
+def run_inputs(run: Any, features: list[str], inputs: str, history: dict[str, Any] | None) -> F64:
+    """A model's inputs from a run: the named columns as ``inputs`` says (absolute or rise),
+    then, with a ``history`` entry, each reading's rises over its time constants."""
+    x: F64 = run.input_matrix(features, inputs)
+    if history is not None:
+        x = _core.history_transform(x, run.time_s, history["tau_s"], history["step_s"])
+    return x
+
+
 def _from_dict(doc: Any, expect: type[Estimator] | None = None) -> Estimator:
     if not isinstance(doc, dict):
         raise ModelFormatError("a model file holds a JSON object")
@@ -335,11 +366,13 @@ def _from_text(text: str, expect: type[Estimator] | None = None) -> Estimator:
     est.inputs_ = header.get("inputs", "absolute")
     if not pre:
         est.guard_ = header.get("guard")
+        est.history_ = header.get("history")
         return est
     wrapped: Estimator = _WRAPPERS[pre["kind"]]._wrap_restored(
         est, _core.Preprocessing.from_json(json.dumps(pre), n_features)
     )
     wrapped.guard_ = header.get("guard")
+    wrapped.history_ = header.get("history")
     return wrapped
 
 

@@ -94,6 +94,17 @@ _positive_int = _int_at_least(1)
 _nonneg_int = _int_at_least(0)
 
 
+def _taus(text: str) -> list[float]:
+    """An argparse type: comma-separated time constants in seconds, each > 0."""
+    try:
+        taus = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a list of seconds, e.g. 900,3600") from None
+    if not taus or any(not (0 < t < float("inf")) for t in taus):
+        raise argparse.ArgumentTypeError(f"time constants must be finite numbers of seconds > 0, got {text!r}")
+    return taus
+
+
 def _nonneg_float(text: str) -> float:
     """An argparse type: a finite number >= 0 (e.g. seconds)."""
     try:
@@ -139,9 +150,11 @@ def _make_svr(args: argparse.Namespace, run: Run, sensors: list[str]) -> Estimat
 
     if not args.tune:
         return SVR(C=args.C, epsilon=args.epsilon, gamma=args.gamma if args.gamma is not None else "scale")
+    from .base import _history, run_inputs
     from .swarm import tune_svr
 
-    res = tune_svr(run.input_matrix(sensors, args.inputs), run[args.axis], method=args.tune, cv=args.cv,
+    x = run_inputs(run, sensors, args.inputs, _history(args.history, run.time_s))
+    res = tune_svr(x, run[args.axis], method=args.tune, cv=args.cv,
                    cv_kind=args.cv_kind, gap=args.gap, epsilon=args.epsilon, pop=args.pop,
                    iters=args.iters, seed=args.seed, progress=_progress_enabled(args))
     how = (f"{args.cv} time-ordered splits (gap {args.gap})" if args.cv_kind == "time"
@@ -200,7 +213,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
         model = _make_svr(args, run, sensors)
     else:
         model = _make_model(args, len(run))
-    model.fit_run(run, args.axis, sensors, inputs=args.inputs)
+    model.fit_run(run, args.axis, sensors, inputs=args.inputs, history=args.history)
     _say(args, f"fitted {args.model} on {len(run)} samples of {run.source}: {args.axis} from {', '.join(sensors)}")
     report: dict[str, Any] = {"model": args.model, "axis": args.axis, "sensors": sensors}
     train = scores(run[args.axis], model.predict_run(run))
@@ -433,6 +446,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "training error if that is larger)")
     f.add_argument("--inputs", choices=["rise", "absolute"], default="rise",
                    help="model from each sensor's rise since the run's start (default) or absolute readings")
+    f.add_argument("--history", type=_taus, default=None, metavar="TAU,...",
+                   help="also read each sensor's rise over about the last TAU seconds (first-order filters), "
+                        "e.g. 900,3600; kept as state on the edge")
     f.add_argument("--test", help="a held-out run to score the model on")
     f.add_argument("--no-guard", action="store_true",
                    help="write no sensor-fault guard (default: limits learnt from the run and, for mlr/rbf/svr/bp, "

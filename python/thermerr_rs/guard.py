@@ -62,10 +62,12 @@ def add_guard(model: Estimator, run: Run, *, hold_s: float = DEFAULT_HOLD_S, fal
         model.to_json(), np.ascontiguousarray(run.matrix(features)), run.time_s, float(hold_s)
     )
     guard: dict[str, Any] = json.loads(guard_json)
+    history = getattr(model, "history_", None)
+    taus = history["tau_s"] if history else None
     if fallbacks and takes_fallbacks and len(features) >= 2:
         for name in features:
             rest = [f for f in features if f != name]
-            reduced = clone(model).fit_run(run, target, rest, inputs=model.inputs_)
+            reduced = clone(model).fit_run(run, target, rest, inputs=model.inputs_, history=taus)
             guard["fallbacks"].append({"without": name, "model": reduced.to_dict()})
     model.guard_ = guard
     model.to_json()  # the core validates the whole file, guard included, now rather than at save

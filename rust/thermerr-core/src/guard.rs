@@ -157,9 +157,10 @@ impl Guard {
     /// ordered; each fallback a valid model file of a model without state from sample to
     /// sample, reading the same features but the one it does without, for the same target.
     pub fn validate(&self, header: &Header, n_features: usize) -> Result<()> {
-        if self.sensors.len() != n_features {
+        let n_in = header.n_inputs(n_features);
+        if self.sensors.len() != n_in {
             return Err(format_err(format!(
-                "guard: {} sensor limits for {n_features} features",
+                "guard: {} sensor limits for {n_in} features",
                 self.sensors.len()
             )));
         }
@@ -340,7 +341,7 @@ impl GuardedPredictor {
         let Some(guard) = header.guard.clone() else {
             return Ok(None);
         };
-        let n = main.n_features();
+        let n = main.n_inputs();
         let fallbacks = if static_model(&main) {
             guard.fallback_predictors(header)?
         } else {
@@ -460,14 +461,14 @@ impl GuardedPredictor {
         if waiting {
             return Ok(None);
         }
-        let y_main = self.main.predict_sample(&self.x)?;
+        let y_main = self.main.predict_sample_at(Some(t), &self.x, None)?;
         if !self.primed {
             // the fallbacks' rise baseline is the run's first sample, as the main model's
             for (p, idx) in self.fallbacks.iter_mut().flatten() {
                 for (f, &i) in self.xf.iter_mut().zip(idx.iter()) {
                     *f = self.x[i];
                 }
-                p.predict_sample(&self.xf)?;
+                p.predict_sample_at(Some(t), &self.xf, None)?;
             }
             self.primed = true;
         }
@@ -479,7 +480,7 @@ impl GuardedPredictor {
                     *f = self.x[i];
                 }
                 self.sensors[j].status = SensorStatus::Fallback;
-                p.predict_sample(&self.xf)?
+                p.predict_sample_at(Some(t), &self.xf, None)?
             }
             _ => self.last_y.unwrap_or(y_main),
         };

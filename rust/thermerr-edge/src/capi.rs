@@ -67,7 +67,7 @@ pub unsafe extern "C" fn te_open(path: *const c_char) -> *mut TeModel {
 pub unsafe extern "C" fn te_n_features(m: *const TeModel) -> c_int {
     // SAFETY: per the contract above
     match unsafe { m.as_ref() } {
-        Some(m) => m.p.n_features() as c_int,
+        Some(m) => m.p.n_inputs() as c_int,
         None => TE_ERR_NULL,
     }
 }
@@ -93,10 +93,10 @@ pub unsafe extern "C" fn te_predict(
     let r = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: per the contract above
         let (m, xs) = unsafe { (&mut *m, std::slice::from_raw_parts(x, n)) };
-        if n != m.p.n_features() {
+        if n != m.p.n_inputs() {
             set_error(&format!(
                 "te_predict: the model takes {} features, got {n}",
-                m.p.n_features()
+                m.p.n_inputs()
             ));
             return TE_ERR_FEATURES;
         }

@@ -66,7 +66,7 @@ impl LineFilter {
             names: wanted.to_vec(),
             time: names.iter().position(|n| *n == "time_s"),
             width: names.len(),
-            x: vec![0.0; p.n_features()],
+            x: vec![0.0; p.n_inputs()],
             row: 0,
         })
     }
@@ -141,7 +141,8 @@ impl LineFilter {
             return Ok(None);
         }
         let (x, time) = self.parse_row(l)?;
-        let y = p.predict_sample(x).map_err(|e| e.to_string())?;
+        let t = time.and_then(|t| t.parse::<f64>().ok());
+        let y = p.predict_sample_at(t, x).map_err(|e| e.to_string())?;
         let row = self.row;
         self.row += 1;
         Ok(Some(Output { time, row, y }))

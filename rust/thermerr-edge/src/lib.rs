@@ -79,6 +79,13 @@ impl Predictor {
         self.0.kind()
     }
 
+    /// The readings a sample holds (one per feature column; a model with a history makes its
+    /// own inputs from them).
+    pub fn n_inputs(&self) -> usize {
+        self.0.n_inputs()
+    }
+
+    /// The model's own inputs per sample.
     pub fn n_features(&self) -> usize {
         self.0.n_features()
     }
@@ -115,6 +122,15 @@ impl Predictor {
     #[inline]
     pub fn predict_sample(&mut self, x: &[f64]) -> Result<f64> {
         self.predict_sample_measured(x, None)
+    }
+
+    /// As [`Predictor::predict_sample`], at time `t` in seconds (a model with a history filters
+    /// its readings over the time since the previous sample; `None`: its training step).
+    #[inline]
+    pub fn predict_sample_at(&mut self, t: Option<f64>, x: &[f64]) -> Result<f64> {
+        self.0
+            .predict_sample_at(t, x, None)
+            .map_err(|e| EdgeError::Input(e.to_string()))
     }
 
     /// As [`Predictor::predict_sample`], with the measured error of the previous sample when it

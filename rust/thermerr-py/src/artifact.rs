@@ -275,7 +275,37 @@ fn predict_guarded<'py>(
     Ok((vec_to_py(py, y), status))
 }
 
+/// A run's model inputs with temperature history (`thermerr_core::artifact::History`): each
+/// reading, then its rise over each time constant.
+#[pyfunction]
+#[pyo3(signature = (x, times, tau_s, step_s))]
+fn history_transform<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    times: Option<PyReadonlyArray1<'py, f64>>,
+    tau_s: Vec<f64>,
+    step_s: f64,
+) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    let xs = samples(&x)?;
+    let t = match &times {
+        Some(a) => Some(slice1(a)?),
+        None => None,
+    };
+    let h = thermerr_core::artifact::History { tau_s, step_s };
+    let out = h
+        .transform(xs.as_slice(), xs.ncols(), t)
+        .map_err(PyErrWrap)?;
+    crate::matrix_to_py(
+        py,
+        thermerr_core::Matrix {
+            shape: [xs.nrows(), xs.ncols() * h.width()],
+            data: out,
+        },
+    )
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(history_transform, m)?)?;
     m.add_function(wrap_pyfunction!(guard_from_training, m)?)?;
     m.add_function(wrap_pyfunction!(predict_guarded, m)?)?;
     m.add_class::<PyPreprocessing>()?;

@@ -12,6 +12,7 @@
 //! Their arithmetic has one owner, [`Preprocessing::scale_row`] and friends, used by the batch
 //! transforms the library fits with and by the streaming [`Predictor`] the edge runs.
 
+mod history;
 mod stream;
 
 use serde::{Deserialize, Serialize};
@@ -26,6 +27,7 @@ use crate::nn::{scale01, BpModel};
 use crate::rbf::RbfModel;
 use crate::svr::SvrModel;
 
+pub use history::{History, HistoryState};
 pub use stream::Predictor;
 
 /// The model-file schema version this crate reads and writes.
@@ -395,18 +397,46 @@ pub struct Header {
     pub target: Option<String>,
     pub inputs: Inputs,
     pub preprocessing: Option<Preprocessing>,
+    /// temperature history as inputs ([`History`]), when fitted with it
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub history: Option<History>,
     /// sensor-fault limits and fallback models ([`crate::guard`]), when fitted with them
     #[serde(skip_serializing_if = "Option::is_none")]
     pub guard: Option<Guard>,
 }
 
 impl Header {
+    /// The readings a model of `n_features` inputs takes per sample: its features, or with a
+    /// history, the readings the history is built from.
+    pub fn n_inputs(&self, n_features: usize) -> usize {
+        match &self.history {
+            Some(h) => n_features / h.width(),
+            None => n_features,
+        }
+    }
+
     /// Checks the header against the model's feature count.
     pub fn validate(&self, n_features: usize) -> Result<()> {
-        if let Some(f) = &self.features {
-            if f.len() != n_features {
+        if let Some(h) = &self.history {
+            h.validate()?;
+            if n_features % h.width() != 0 {
                 return Err(format_err(format!(
-                    "{} feature names for {n_features} features",
+                    "history: {n_features} features are not readings × {} (each reading and its \
+                     {} rises)",
+                    h.width(),
+                    h.tau_s.len()
+                )));
+            }
+        }
+        let n_in = self.n_inputs(n_features);
+        if let Some(f) = &self.features {
+            if f.len() != n_in {
+                let with = match &self.history {
+                    Some(h) => format!(" ({n_features} inputs = readings × {})", h.width()),
+                    None => String::new(),
+                };
+                return Err(format_err(format!(
+                    "{} feature names for {n_in} features{with}",
                     f.len()
                 )));
             }
@@ -439,6 +469,8 @@ struct RawFile {
     inputs: Option<String>,
     #[serde(default)]
     preprocessing: Option<Value>,
+    #[serde(default)]
+    history: Option<Value>,
     #[serde(default)]
     guard: Option<Value>,
     model: Value,
@@ -495,6 +527,12 @@ pub fn read_envelope(text: &str) -> Result<(String, usize, Header, Value)> {
         target: raw.target,
         inputs,
         preprocessing: read_preprocessing(raw.preprocessing)?,
+        history: match raw.history {
+            None | Some(Value::Null) => None,
+            Some(v) => {
+                Some(serde_json::from_value(v).map_err(|e| format_err(format!("history: {e}")))?)
+            }
+        },
         guard: match raw.guard {
             None | Some(Value::Null) => None,
             Some(v) => {
@@ -525,6 +563,9 @@ pub fn write_envelope(
         "preprocessing": header.preprocessing,
         "model": model,
     });
+    if let Some(h) = &header.history {
+        doc["history"] = serde_json::to_value(h).map_err(|e| format_err(e.to_string()))?;
+    }
     if let Some(g) = &header.guard {
         // validated with the header (finite limits): serde_json would write NaN as null
         doc["guard"] = serde_json::to_value(g).map_err(|e| format_err(e.to_string()))?;

@@ -1,6 +1,6 @@
 //! A loaded model file with its per-run state: what `thermerr-edge` runs sample by sample.
 
-use super::{Artifact, Inputs, Model, Preprocessing};
+use super::{Artifact, HistoryState, Inputs, Model, Preprocessing};
 use crate::error::{Error, Result};
 use crate::grey::GreyState;
 use crate::hybrid::HybridState;
@@ -71,6 +71,9 @@ pub struct Predictor {
     // per-run state
     first: Vec<f64>,
     have_first: bool,
+    /// the readings after the rise, before the history is added (the model's inputs without one)
+    raw: Vec<f64>,
+    history: Option<HistoryState>,
     acc: Vec<f64>,
     y1_prev: f64,
     buf: Vec<f64>,
@@ -80,11 +83,18 @@ pub struct Predictor {
 impl Predictor {
     pub fn new(artifact: Artifact) -> Self {
         let n = artifact.n_features();
+        let n_in = artifact.header.n_inputs(n);
         Predictor {
             state: ModelState::new(&artifact.model),
+            history: artifact
+                .header
+                .history
+                .as_ref()
+                .map(|h| HistoryState::new(h, n_in)),
             artifact,
-            first: vec![0.0; n],
+            first: vec![0.0; n_in],
             have_first: false,
+            raw: vec![0.0; n_in],
             acc: vec![0.0; n],
             y1_prev: 0.0,
             buf: vec![0.0; n],
@@ -108,8 +118,14 @@ impl Predictor {
         self.artifact.model.kind()
     }
 
+    /// The model's inputs per sample (with a history: the readings and their rises).
     pub fn n_features(&self) -> usize {
         self.buf.len()
+    }
+
+    /// The readings a sample holds: one per feature column (`features`).
+    pub fn n_inputs(&self) -> usize {
+        self.raw.len()
     }
 
     /// The run columns the model reads, in order (if it was fitted on a run).
@@ -126,6 +142,7 @@ impl Predictor {
     pub fn stateful(&self) -> bool {
         let h = &self.artifact.header;
         h.inputs == Inputs::Rise
+            || h.history.is_some()
             || h.preprocessing
                 .as_ref()
                 .is_some_and(Preprocessing::accumulates)
@@ -135,6 +152,9 @@ impl Predictor {
     /// Forgets the run so far: the next sample starts a new run.
     pub fn reset(&mut self) {
         self.have_first = false;
+        if let Some(h) = &mut self.history {
+            h.reset();
+        }
         self.acc.iter_mut().for_each(|v| *v = 0.0);
         self.y1_prev = 0.0;
         self.state.reset();
@@ -154,7 +174,18 @@ impl Predictor {
         x: &[f64],
         measured_prev: Option<f64>,
     ) -> Result<f64> {
-        let n = self.buf.len();
+        self.predict_sample_at(None, x, measured_prev)
+    }
+
+    /// As [`Predictor::predict_sample_measured`], at time `t` (seconds): a model with a history
+    /// filters its readings over the time since the previous sample (`step_s` without times).
+    pub fn predict_sample_at(
+        &mut self,
+        t: Option<f64>,
+        x: &[f64],
+        measured_prev: Option<f64>,
+    ) -> Result<f64> {
+        let n = self.raw.len();
         if x.len() != n {
             return Err(Error::Shape(format!(
                 "the model takes {n} features, got {}",
@@ -172,8 +203,12 @@ impl Predictor {
             self.first.copy_from_slice(x);
             self.have_first = true;
         }
-        for (j, b) in self.buf.iter_mut().enumerate() {
-            *b = if rise { x[j] - self.first[j] } else { x[j] };
+        for (j, r) in self.raw.iter_mut().enumerate() {
+            *r = if rise { x[j] - self.first[j] } else { x[j] };
+        }
+        match (&mut self.history, &self.artifact.header.history) {
+            (Some(state), Some(h)) => state.push(h, t, &self.raw, &mut self.buf),
+            _ => self.buf.copy_from_slice(&self.raw),
         }
         let (model, state) = (&self.artifact.model, &mut self.state);
         let kind = model.kind();
