@@ -125,7 +125,7 @@ def test_a_refit_without_history_forgets_it(example_run1):
     run = tr.read_run(example_run1)
     model = tr.MLR().fit_run(run, "E_z", SENSORS, history=TAUS)
     model.fit_run(run, "E_z", SENSORS)
-    assert model.history_ is None and "history" not in model.to_dict()
+    assert model.input_history_ is None and "history" not in model.to_dict()
     assert model.n_features_in_ == 4
 
 

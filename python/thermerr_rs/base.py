@@ -104,7 +104,7 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
                    inputs: str = "absolute") -> E:
         self.n_features_in_ = x.shape[1]
         self.guard_ = None  # a guard learnt on an earlier fit no longer applies
-        self.history_ = None  # fit_run sets it after fitting with a history
+        self.input_history_ = None  # fit_run sets it after fitting with a history
         self.feature_names_in_ = names
         self.target_name_ = target
         self.inputs_ = inputs
@@ -143,7 +143,7 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         hist = _history(history, run.time_s)
         x = run_inputs(run, list(features), inputs, hist)
         self._fit_checked(x, run[target], names=list(features), target=target, inputs=inputs)
-        self.history_ = hist
+        self.input_history_ = hist
         return self
 
     def predict_run(self, run: Any, *, shape: Any = None) -> F64:
@@ -163,7 +163,7 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         self._check_fitted()
         if not self.feature_names_in_:
             raise ModelFormatError("this model does not record its feature columns; use predict(X)")
-        return run_inputs(run, self.feature_names_in_, self.inputs_, getattr(self, "history_", None))
+        return run_inputs(run, self.feature_names_in_, self.inputs_, getattr(self, "input_history_", None))
 
     def _check_fitted(self) -> None:
         if self._inner is None:
@@ -211,7 +211,7 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         """The model file's text; the core validates the model before it writes it."""
         self._check_fitted()
         head = self._header()
-        head["history"] = getattr(self, "history_", None)  # fit_run(history=...)
+        head["history"] = getattr(self, "input_history_", None)  # fit_run(history=...)
         head["guard"] = getattr(self, "guard_", None)  # thermerr_rs.add_guard
         try:
             header = json.dumps(head, allow_nan=False)
@@ -366,13 +366,13 @@ def _from_text(text: str, expect: type[Estimator] | None = None) -> Estimator:
     est.inputs_ = header.get("inputs", "absolute")
     if not pre:
         est.guard_ = header.get("guard")
-        est.history_ = header.get("history")
+        est.input_history_ = header.get("history")
         return est
     wrapped: Estimator = _WRAPPERS[pre["kind"]]._wrap_restored(
         est, _core.Preprocessing.from_json(json.dumps(pre), n_features)
     )
     wrapped.guard_ = header.get("guard")
-    wrapped.history_ = header.get("history")
+    wrapped.input_history_ = header.get("history")
     return wrapped
 
 

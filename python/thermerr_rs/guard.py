@@ -62,7 +62,7 @@ def add_guard(model: Estimator, run: Run, *, hold_s: float = DEFAULT_HOLD_S, fal
         model.to_json(), np.ascontiguousarray(run.matrix(features)), run.time_s, float(hold_s)
     )
     guard: dict[str, Any] = json.loads(guard_json)
-    history = getattr(model, "history_", None)
+    history = getattr(model, "input_history_", None)
     taus = history["tau_s"] if history else None
     if fallbacks and takes_fallbacks and len(features) >= 2:
         for name in features:

@@ -243,10 +243,10 @@ fn predict_guarded<'py>(
         .map_err(PyErrWrap)?
         .ok_or_else(|| format_err("the model file has no guard (fit it with one)"))?;
     let d = xs.ncols();
-    if d != g.predictor().n_features() {
+    if d != g.predictor().n_inputs() {
         return Err(PyErrWrap(Error::Shape(format!(
             "the model takes {} features, got {d} columns",
-            g.predictor().n_features()
+            g.predictor().n_inputs()
         )))
         .into());
     }
