@@ -290,16 +290,159 @@ pub(super) fn fit(
     };
     Ok(Candidate {
         cause: spec.cause,
-        parameters: spec
-            .cause
-            .parameters(&cal.machine, base.axis_index, spec.node.as_deref()),
-        column: spec.column,
-        node: spec.node,
+        parameters: parameters(&spec, &cal.machine, base.axis_index),
+        column: spec.column.clone(),
+        node: spec.node.clone(),
         delta_bic: cal.bic() - base.calibration.bic(),
         gain_pct: score::gain_pct(base.holdout, &h),
         score: score::joint_score(base.holdout, &h),
         sensor_gain_pct,
         holdout: h,
         calibration: cal,
+        spec: Some(spec),
     })
+}
+
+/// The input of a speed-growth extension (its drift entry's last input term).
+fn growth_input(s: &Spec, axis: usize) -> Option<&str> {
+    (s.cause == Cause::SpeedGrowth)
+        .then(|| {
+            s.machine.drift[axis]
+                .inputs
+                .last()
+                .map(|t| t.input.as_str())
+        })
+        .flatten()
+}
+
+/// Whether `a` models what the already accepted `b` models: the same cause on the same place
+/// (column for a source or a sensor, node for a nonlinear expansion, input for a speed growth;
+/// a lag or an ambient coupling is one per axis). Such a candidate is not fitted again.
+pub(super) fn overlaps(a: &Spec, b: &Spec, axis: usize) -> bool {
+    a.cause == b.cause
+        && match a.cause {
+            Cause::UnmodeledSource | Cause::SensorDrift => a.column == b.column,
+            Cause::NonlinearExpansion => a.node == b.node,
+            Cause::SpeedGrowth => growth_input(a, axis) == growth_input(b, axis),
+            Cause::ThermalLag | Cause::AmbientCoupling => true,
+        }
+}
+
+/// Whether `a` is the same extension as `b` (cause, column, node and input).
+pub(super) fn same(a: &Spec, b: &Spec, axis: usize) -> bool {
+    a.cause == b.cause
+        && a.column == b.column
+        && a.node == b.node
+        && growth_input(a, axis) == growth_input(b, axis)
+}
+
+/// The fitted parameters of extension `s` in the calibrated machine `m`, which may carry other
+/// extensions too: a source's link and a growth's input term are found by name, not as the last.
+pub(super) fn parameters(
+    s: &Spec,
+    m: &Machine,
+    axis: usize,
+) -> std::collections::BTreeMap<String, f64> {
+    let named = |pairs: &[(&str, f64)]| {
+        pairs
+            .iter()
+            .map(|&(k, v)| (k.to_string(), v))
+            .collect::<std::collections::BTreeMap<_, _>>()
+    };
+    match s.cause {
+        Cause::UnmodeledSource => {
+            let src = s.machine.links.last().map(|l| &l.between);
+            m.links
+                .iter()
+                .find(|l| Some(&l.between) == src)
+                .map_or_else(Default::default, |l| named(&[("w_per_k", l.w_per_k)]))
+        }
+        Cause::SpeedGrowth => {
+            let input = growth_input(s, axis);
+            m.drift[axis]
+                .inputs
+                .iter()
+                .find(|t| Some(t.input.as_str()) == input)
+                .map_or_else(Default::default, |t| {
+                    named(&[("um", t.um), ("exponent", t.exponent), ("ref", t.reference)])
+                })
+        }
+        c => c.parameters(m, axis, s.node.as_deref()),
+    }
+}
+
+/// The value of an extension parameter of machine `target` in the calibrated machine `from`
+/// (matched by name: node, link ends, input), in search space, within the parameter's bounds.
+fn carried(fp: &FreeParam, target: &Machine, from: &Machine) -> Option<f64> {
+    let v = match fp.param {
+        Param::Lag(d) => from.drift.get(d)?.lag_s,
+        Param::SensorDrift(i) => from
+            .node_index(&target.nodes.get(i)?.name)
+            .map(|j| from.nodes[j].sensor_drift_k_per_h),
+        Param::InputExponent(d, k) => {
+            let input = &target.drift.get(d)?.inputs.get(k)?.input;
+            from.drift
+                .get(d)?
+                .inputs
+                .iter()
+                .find(|t| &t.input == input)
+                .map(|t| t.exponent)
+        }
+        Param::Link(k) => {
+            let ends = &target.links.get(k)?.between;
+            from.links
+                .iter()
+                .find(|l| &l.between == ends)
+                .map(|l| l.w_per_k)
+        }
+        _ => None,
+    }?;
+    let v = if fp.log { v.max(1e-300).ln() } else { v };
+    v.is_finite().then(|| v.clamp(fp.lo, fp.hi))
+}
+
+/// `extra` (the extension parameters of machine `target`) starting from their values in the
+/// calibrated machine `from` where it has them.
+pub(super) fn carry(extra: &[FreeParam], target: &Machine, from: &Machine) -> Vec<FreeParam> {
+    extra
+        .iter()
+        .map(|fp| {
+            let mut fp = fp.clone();
+            if let Some(v) = carried(&fp, target, from) {
+                fp.start = v;
+            }
+            fp
+        })
+        .collect()
+}
+
+/// The extensions `chain` (accepted in this order, each spec carrying its own extension only)
+/// rebuilt on the nominal machine `m`: one spec whose machine holds them all and whose extra
+/// parameters are all of theirs. `None` if one of them cannot be rebuilt (it cannot happen for a
+/// chain that was built on `m`).
+pub(super) fn rebuild(
+    m: &Machine,
+    chain: &[&Spec],
+    axis: usize,
+    run: &RunView<'_>,
+) -> Option<Spec> {
+    let mut cur: Option<Spec> = None;
+    for own in chain {
+        let on = cur.as_ref().map_or(m, |c| &c.machine);
+        let cols: Vec<String> = own.column.iter().cloned().collect();
+        let next = own
+            .cause
+            .specs(on, axis, run, &cols)
+            .into_iter()
+            .find(|s| same(s, own, axis))?;
+        cur = Some(match cur {
+            None => next,
+            Some(prev) => {
+                let mut extra = prev.extra;
+                extra.extend(next.extra.iter().cloned());
+                Spec { extra, ..next }
+            }
+        });
+    }
+    cur
 }
