@@ -446,3 +446,85 @@ pub(super) fn rebuild(
     }
     cur
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::run::{NanPolicy, Run};
+
+    const TWO: &str = r#"
+name = "two"
+ambient = "T_ambient"
+[[nodes]]
+name = "a"
+capacity_j_per_k = 1000.0
+ambient_w_per_k = 2.0
+sensor = "T_a"
+[[nodes]]
+name = "b"
+capacity_j_per_k = 5000.0
+ambient_w_per_k = 4.0
+[[links]]
+between = ["a", "b"]
+w_per_k = 3.0
+[[sources]]
+node = "a"
+input = "U_rpm"
+w = 50.0
+ref = 1000.0
+exponent = 1.0
+[[drift]]
+axis = "E_z"
+um_per_k = { a = 1.0, b = 2.0 }
+"#;
+
+    #[test]
+    fn a_chain_is_rebuilt_without_one_of_its_extensions_and_keeps_its_fitted_values() {
+        let m = Machine::from_toml(TWO, "two.toml").unwrap();
+        let names = ["time_s", "T_ambient", "T_a", "U_rpm", "T_x", "T_y", "E_z"];
+        let cols = names
+            .iter()
+            .enumerate()
+            .map(|(j, _)| (0..20).map(|k| (k * (j + 1)) as f64).collect())
+            .collect();
+        let names = names.iter().map(|s| s.to_string()).collect();
+        let run = Run::from_columns("<t>", names, cols, NanPolicy::Error, None).unwrap();
+        let view = RunView::new(&run);
+        let on = |specs: Vec<Spec>, node: &str| {
+            specs
+                .into_iter()
+                .find(|s| s.node.as_deref() == Some(node))
+                .unwrap()
+        };
+        // accepted in this order: a source on T_x at a, a drifting T_a, a source on T_y at b
+        let s1 = on(unmodeled_source(&m, &["T_x".into()]), "a");
+        let s2 = on(sensor_drift(&s1.machine), "a");
+        let s3 = on(unmodeled_source(&s2.machine, &["T_y".into()]), "b");
+        let n = m.links.len();
+        let full = rebuild(&m, &[&s1, &s2, &s3], 0, &view).unwrap();
+        assert_eq!(full.machine.links.len(), n + 2);
+        assert_eq!(full.extra.len(), 3);
+        // without the first source, the second one's link moves down an index
+        let red = rebuild(&m, &[&s2, &s3], 0, &view).unwrap();
+        assert_eq!(red.machine.links.len(), n + 1);
+        assert_eq!(
+            red.machine.links[n].between,
+            ["b", "source_y"].map(String::from)
+        );
+        assert!(matches!(red.extra[1].param, Param::Link(k) if k == n));
+        // fitted values are carried by name, not by index
+        let mut fitted = full.machine.clone();
+        fitted.links[n].w_per_k = 0.5; // T_x → a
+        fitted.links[n + 1].w_per_k = 7.5; // T_y → b
+        fitted.nodes[0].sensor_drift_k_per_h = 0.2;
+        let carried = carry(&red.extra, &red.machine, &fitted);
+        assert_eq!(carried[0].start, 0.2);
+        assert!((carried[1].start - 7.5f64.ln()).abs() < 1e-12);
+        assert_eq!(parameters(&s1, &fitted, 0)["w_per_k"], 0.5);
+        assert_eq!(parameters(&s3, &fitted, 0)["w_per_k"], 7.5);
+        // the same cause on the same column is not tried again, on another column it is
+        let again = on(unmodeled_source(&full.machine, &["T_x".into()]), "b");
+        assert!(overlaps(&again, &s1, 0) && !overlaps(&s3, &s1, 0));
+        assert!(!overlaps(&s2, &s1, 0));
+    }
+}
