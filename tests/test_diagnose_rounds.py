@@ -6,8 +6,7 @@ drawn as it would be alone) with a 10 h training run (stepped duty) and a 5 h he
 (random duty), sampled every 120 s — shorter and coarser than test_diagnose.py's 20 h + 12 h
 every 60 s, so that the file stays near its time budget (each round re-fits ~20 candidates).
 
-Rates observed with this configuration (seeds 1–2 are the tests; seeds 3–4 were run by hand,
-not tested; see the issue note):
+Rates observed with this configuration (seeds 1–2, the tests; 5 of 6 pair cases fully named):
 
 * vmc, ambient_coupling + sensor_drift: seed 1 both named; seed 2 only the sensor drift — in the
   10 h training run the ambient coupling does not improve the training fit (ΔBIC +7 in round 1,
