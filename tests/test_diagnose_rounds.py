@@ -17,6 +17,13 @@ Rates observed with this configuration (seeds 1–2, the tests; 5 of 6 pair case
 * lathe, speed_growth + unmodeled_source (T_hydraulic): both named on seeds 1 and 2 (the source in
   round 1, the growth in round 2). The same seed 2 with 12 h + 6 h runs names the decoy
   T_cabinet in round 1 instead (round 1 is today's rule), so this pair is not robust to the run.
+
+Seed 3 (run by hand, not tested): lag + growth and growth + source both named; ambient + sensor
+drift names only the ambient coupling (0.35 µm remainder at 0.16 µm noise). Single effects with
+these short runs (seed 1 of six causes, by hand): one cause each, except vmc unmodeled_source,
+where round 1 names the decoy T_cabinet, round 2 adds T_hydraulic and the backward check keeps
+both (the verdict stays round 1's decoy); with test_diagnose.py's 20 h + 12 h runs round 1 names
+T_hydraulic.
 """
 
 from __future__ import annotations
