@@ -164,7 +164,12 @@ class MachineModel:
         holdout_fraction: float = 0.3,
         min_score: float = 0.1,
         noise_ratio: float = 2.0,
-    ) -> dict[str, Any]: ...
+    ) -> dict[str, Any]:
+        """The diagnosis in rounds: ``report`` (report.json as JSON text: the round-1 fields, plus
+        ``causes`` — each accepted cause's ``cause``, ``column``, ``node``, ``axis``, ``gain_pct``,
+        ``params``, ``round``, ``rmse_um`` in the order accepted —, ``remainder_um`` and ``rounds``),
+        ``calibration``, ``series``, ``calibrated_toml`` and ``extended_toml`` (every named cause)."""
+        ...
 
 # --- support vector regression -------------------------------------------------------------------
 @final

@@ -116,6 +116,17 @@ def render_html(report: dict[str, Any], series: dict[str, Any]) -> str:
         f"<td>{esc(json.dumps(c.get('parameters', {})))}</td></tr>"
         for c in report.get("candidates", [])
     )
+    round_rows = "".join(
+        f"<tr><td>{r['round']}</td><td>{esc(r['cause'] or '—')}</td><td>{esc(str(r.get('column') or ''))}</td>"
+        f"<td>{r['rmse_before_um']:.3f}</td><td>{r['rmse_um']:.3f}</td><td>{r['gain_pct']:.1f}</td>"
+        f"<td>{100 * r['excess_share']:.0f}</td>"
+        f"<td>{'named' if r['kept'] else ('dropped by the backward check' if r['accepted'] else 'not accepted')}</td></tr>"
+        for r in report.get("rounds", [])
+    )
+    rem = report.get("remainder_um", 0.0)
+    remainder = (f"<p>Unexplained remainder: <b>{rem:.3f} µm</b> held-out RMS above the probe noise, "
+                 "left by every named cause together.</p>" if rem > 0 else
+                 "<p>Unexplained remainder: none (the final held-out residual is within the noise ratio).</p>")
     plots = _plots(series, report)
     figs = NO_PLOTS if plots is None else "".join(
         f"<figure><img alt='{esc(title)}' src='data:image/png;base64,{png}'><figcaption>{esc(title)}</figcaption></figure>"
@@ -133,12 +144,15 @@ figure{{margin:1.5em 0}} img{{max-width:100%}} figcaption{{color:#555;font-size:
 <p class="evidence">{esc(report.get('evidence', ''))}</p>
 <table><tr><th></th><th>RMS (µm)</th><th>max |r| (µm)</th><th>band (µm)</th></tr>
 <tr><td>calibrated model (baseline)</td><td>{b['rmse_um']:.3f}</td><td>{b['max_abs_um']:.3f}</td><td>{b['band_um']:.3f}</td></tr>
-<tr><td>extended model</td><td>{e['rmse_um']:.3f}</td><td>{e['max_abs_um']:.3f}</td><td>{e['band_um']:.3f}</td></tr></table>
+<tr><td>extended model (every named cause)</td><td>{e['rmse_um']:.3f}</td><td>{e['max_abs_um']:.3f}</td><td>{e['band_um']:.3f}</td></tr></table>
 <p>All figures are on data held out from calibration ({esc(report.get('holdout', ''))}). Gain: {report['gain_pct']:.1f} %.</p>
+<h2>Rounds</h2>
+<table><tr><th>round</th><th>cause</th><th>column</th><th>held-out RMS before (µm)</th><th>held-out RMS after (µm)</th><th>gain (%)</th><th>of the excess (%)</th><th></th></tr>{round_rows}</table>
+{remainder}
 {figs}
-<h2>Candidates</h2>
+<h2>Candidates (round 1)</h2>
 <table><tr><th>cause</th><th>column</th><th>gain (%)</th><th>score</th><th>ΔBIC (train)</th><th>parameters</th></tr>{rows}</table>
-<p style="color:#777;font-size:.85em">calibrated.toml: the nominal model after calibration; extended.toml: calibrated plus the extension for the verdict.
+<p style="color:#777;font-size:.85em">calibrated.toml: the nominal model after calibration; extended.toml: calibrated plus the extension of every named cause.
 Both load back with <code>thermerr_rs.Machine.load</code> and simulate with the same code.</p>
 </body></html>
 """

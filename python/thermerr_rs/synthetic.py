@@ -16,6 +16,9 @@ augmented system) of a "true" machine that may carry one effect the nominal mode
 ``none``               nothing hidden
 =====================  ===================================================================
 
+:func:`make_multi_case` hides several of them at once (``("ambient_coupling", "sensor_drift")``),
+each with the parameters it would have alone.
+
 Every run also carries a distractor column ``T_cabinet`` (an electrical cabinet that heats up
 but touches nothing), so a diagnosis that names a column must find the right one. Sensor noise
 0.03 °C, probe noise 0.15 µm. The *nominal* machine returned with a case has every parameter
@@ -114,6 +117,8 @@ class Case:
     truth: dict[str, Any]
     nominal: dict[str, Any]
     axis: str = field(default="")
+    #: with several hidden effects (:func:`make_multi_case`): each effect's column or ``None``
+    columns: dict[str, str | None] = field(default_factory=dict)
 
     def nominal_toml(self) -> str:
         return to_toml(self.nominal)
@@ -267,8 +272,7 @@ def _perturb(m: dict[str, Any], rng: np.random.Generator, lo: float = 0.15, hi: 
 
 def _run(
     m: dict[str, Any],
-    hidden: str,
-    hp: dict[str, Any],
+    effects: dict[str, dict[str, Any]],
     duty_kind: str,
     hours: float,
     dt: float,
@@ -289,24 +293,26 @@ def _run(
     for nd in m["nodes"]:
         if "sensor" in nd:
             cols[nd["sensor"]] = np.full(len(t), amb[0])
-    source = (hp["node"], "T_hydraulic", hp["g"]) if hidden == "unmodeled_source" else None
-    sim = simulate_truth(m, cols, lag_s=hp.get("tau") if hidden == "thermal_lag" else None, source=source)
+    src = effects.get("unmodeled_source")
+    source = (src["node"], "T_hydraulic", src["g"]) if src else None
+    lag = effects.get("thermal_lag")
+    sim = simulate_truth(m, cols, lag_s=lag["tau"] if lag else None, source=source)
     axis = m["drift"][0]["axis"]
     e = sim["drift:lag"].copy()
-    if hidden == "ambient_coupling":
+    if hp := effects.get("ambient_coupling"):
         e += hp["k_amb"] * (amb - amb[0])
-    elif hidden == "speed_growth":
+    if hp := effects.get("speed_growth"):
         rpm = cols["U_spindle_rpm"]
         e += hp["g"] * (rpm / src0["ref"]) ** 2 - hp["g"] * (rpm[0] / src0["ref"]) ** 2
-    elif hidden == "nonlinear_expansion":
+    if hp := effects.get("nonlinear_expansion"):
         rise = sim[hp["node"]] - sim[hp["node"]][0]
         e += hp["q"] * rise**2
-    elif hidden == "periodic":
+    if hp := effects.get("periodic"):
         e += hp["amp"] * np.sin(2 * np.pi * t / hp["period_s"])
     for nd in m["nodes"]:
         if "sensor" in nd:
             cols[nd["sensor"]] = sim[nd["name"]].copy()
-    if hidden == "sensor_drift":
+    if hp := effects.get("sensor_drift"):
         cols[hp["column"]] = cols[hp["column"]] + hp["rate_k_per_h"] * t / 3600.0
     if noise:
         for name in list(cols):
@@ -317,23 +323,8 @@ def _run(
     return cols
 
 
-def make_case(
-    topology: str,
-    hidden: str,
-    seed: int,
-    *,
-    train_duty: str = "stepped",
-    test_duty: str = "random",
-    hours: tuple[float, float] = (20.0, 12.0),
-    dt: float = 60.0,
-    noise: bool = True,
-) -> Case:
-    """A training run and a held-out run of a true ``topology`` machine hiding ``hidden``."""
-    if hidden not in HIDDEN:
-        raise ValueError(f"unknown hidden effect {hidden!r} (one of {HIDDEN})")
-    rng = np.random.default_rng(seed)
-    m = machine(topology)
-    nodes = [nd["name"] for nd in m["nodes"]]
+def _draw(m: dict[str, Any], hidden: str, rng: np.random.Generator) -> tuple[dict[str, Any], str | None]:
+    """The hidden effect's true parameters (drawn from ``rng``) and the column it shows in."""
     drift = m["drift"][0]["um_per_k"]
     strong = max(drift, key=lambda kk: abs(drift[kk]))
     hp: dict[str, Any] = {}
@@ -358,12 +349,72 @@ def make_case(
         hp = {"column": column, "rate_k_per_h": float(rng.choice([-1, 1]) * rng.uniform(0.12, 0.2))}
     elif hidden == "periodic":
         hp = {"amp": float(rng.uniform(1.5, 2.5)), "period_s": float(rng.uniform(2400, 3600))}
-    train = _run(m, hidden, hp, train_duty, hours[0], dt, rng, noise=noise)
-    test = _run(m, hidden, hp, test_duty, hours[1], dt, rng, noise=noise)
+    return hp, column
+
+
+def make_case(
+    topology: str,
+    hidden: str,
+    seed: int,
+    *,
+    train_duty: str = "stepped",
+    test_duty: str = "random",
+    hours: tuple[float, float] = (20.0, 12.0),
+    dt: float = 60.0,
+    noise: bool = True,
+) -> Case:
+    """A training run and a held-out run of a true ``topology`` machine hiding ``hidden``."""
+    if hidden not in HIDDEN:
+        raise ValueError(f"unknown hidden effect {hidden!r} (one of {HIDDEN})")
+    rng = np.random.default_rng(seed)
+    m = machine(topology)
+    hp, column = _draw(m, hidden, rng)
+    effects = {hidden: hp} if hidden != "none" else {}
+    train = _run(m, effects, train_duty, hours[0], dt, rng, noise=noise)
+    test = _run(m, effects, test_duty, hours[1], dt, rng, noise=noise)
     nominal = _perturb(m, rng)
-    assert set(nodes) == {nd["name"] for nd in nominal["nodes"]}
+    assert [nd["name"] for nd in m["nodes"]] == [nd["name"] for nd in nominal["nodes"]]
     params = {k: v for k, v in hp.items() if isinstance(v, float)}
     return Case(topology, hidden, seed, column, params, train, test, m, nominal, axis=m["drift"][0]["axis"])
+
+
+def make_multi_case(
+    topology: str,
+    hidden: tuple[str, ...],
+    seed: int,
+    *,
+    params: dict[str, dict[str, Any]] | None = None,
+    train_duty: str = "stepped",
+    test_duty: str = "random",
+    hours: tuple[float, float] = (20.0, 12.0),
+    dt: float = 60.0,
+    noise: bool = True,
+) -> Case:
+    """Like :func:`make_case`, with several effects hidden at once (each drawn as it is alone, in
+    the given order; ``params`` overrides drawn values, e.g. ``{"periodic": {"period_s": 7200}}``).
+    ``Case.hidden`` is the effects joined by ``+``; ``Case.columns`` maps each effect to its
+    column (``None`` where it has none); ``Case.params`` keys are ``effect.name``."""
+    if len(set(hidden)) != len(hidden) or not hidden:
+        raise ValueError(f"hidden effects must be distinct and at least one, got {hidden!r}")
+    for h in hidden:
+        if h not in HIDDEN or h == "none":
+            raise ValueError(f"unknown hidden effect {h!r} (one of {HIDDEN[:-1]})")
+    rng = np.random.default_rng(seed)
+    m = machine(topology)
+    effects: dict[str, dict[str, Any]] = {}
+    columns: dict[str, str | None] = {}
+    for h in hidden:
+        hp, col = _draw(m, h, rng)
+        hp.update((params or {}).get(h, {}))
+        effects[h] = hp
+        columns[h] = hp.get("column", col)
+    train = _run(m, effects, train_duty, hours[0], dt, rng, noise=noise)
+    test = _run(m, effects, test_duty, hours[1], dt, rng, noise=noise)
+    nominal = _perturb(m, rng)
+    flat = {f"{h}.{k}": float(v) for h, hp in effects.items() for k, v in hp.items() if isinstance(v, (int, float))}
+    first = next((c for c in columns.values() if c), None)
+    return Case(topology, "+".join(hidden), seed, first, flat, train, test, m, nominal,
+                axis=m["drift"][0]["axis"], columns=columns)
 
 
 def _toml_value(v: Any) -> str:

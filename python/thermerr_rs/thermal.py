@@ -100,9 +100,17 @@ class Machine:
 
 @dataclass
 class Diagnosis:
-    """The outcome of :func:`diagnose`: ``verdict`` (a cause, ``"none"`` or ``"unexplained"``),
-    ``column``, ``evidence``, held-out figures of the ``baseline`` and ``extended`` models,
-    ``gain_pct``, every ``candidates``' scores, and the ``calibrated``/``extended`` machines."""
+    """The outcome of :func:`diagnose`: ``verdict`` (the first named cause, ``"none"`` or
+    ``"unexplained"``), ``column``, ``evidence``, held-out figures of the ``baseline`` and
+    ``extended`` models, ``gain_pct``, round 1's ``candidates`` with their scores, and the
+    ``calibrated``/``extended`` machines.
+
+    Several effects at once: ``causes`` lists every named cause in the order the rounds accepted
+    it (``cause``, ``column``, ``node``, ``axis``, ``gain_pct`` of its round, ``params`` in the
+    final model, ``round``, ``rmse_um`` after its round); ``rounds`` what each round tried;
+    ``remainder_um`` the held-out RMS above the probe noise that the final model leaves
+    unexplained (0 when within ``noise_ratio`` noise levels). ``extended`` is the model with every
+    named cause."""
 
     report: dict[str, Any]
     series: dict[str, Any]
@@ -130,6 +138,20 @@ class Diagnosis:
     def candidates(self) -> list[dict[str, Any]]:
         return list(self.report["candidates"])
 
+    @property
+    def causes(self) -> list[dict[str, Any]]:
+        """Every named cause in the order accepted (empty for ``none`` and ``unexplained``)."""
+        return list(self.report["causes"])
+
+    @property
+    def rounds(self) -> list[dict[str, Any]]:
+        return list(self.report["rounds"])
+
+    @property
+    def remainder_um(self) -> float:
+        """Held-out RMS above the probe noise that no named cause explains (µm), 0 if none."""
+        return float(self.report["remainder_um"])
+
     def write(self, out_dir: str | os.PathLike[str]) -> Path:
         """Write report.json, calibrated.toml, extended.toml and report.html into ``out_dir``."""
         from .report import write_report
@@ -139,14 +161,20 @@ class Diagnosis:
     def __str__(self) -> str:
         b, e = self.report["baseline"], self.report["extended"]
         col = f" (column {self.column})" if self.column else ""
-        return (f"verdict: {self.verdict}{col}\n{self.evidence}\n"
+        more = ""
+        if len(self.causes) > 1:
+            more += "causes: " + ", ".join(c["cause"] + (f" ({c['column']})" if c["column"] else "") for c in self.causes) + "\n"
+        if self.causes and self.remainder_um > 0:
+            more += f"unexplained remainder: {self.remainder_um:.3f} µm RMS above the probe noise\n"
+        return (f"verdict: {self.verdict}{col}\n{self.evidence}\n{more}"
                 f"held-out RMS: baseline {b['rmse_um']:.3f} µm, extended {e['rmse_um']:.3f} µm, gain {self.gain_pct:.1f} %")
 
 
 def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: str | None = None,
              holdout_fraction: float = 0.3, min_score: float = 0.1, noise_ratio: float = 2.0) -> Diagnosis:
     """Calibrate ``machine`` on ``run`` (its first 70 % when no ``holdout`` run is given), fit the
-    extension of every catalogued cause, score all on the held-out data and name the cause.
+    extension of every catalogued cause, score all on the held-out data and name the cause; then
+    go on in rounds on the extended machine while a further cause passes (docs/machine-model.md).
 
     Every figure in the result is on held-out data: the ``holdout`` run, or the last
     ``holdout_fraction`` of ``run``.

@@ -290,16 +290,241 @@ pub(super) fn fit(
     };
     Ok(Candidate {
         cause: spec.cause,
-        parameters: spec
-            .cause
-            .parameters(&cal.machine, base.axis_index, spec.node.as_deref()),
-        column: spec.column,
-        node: spec.node,
+        parameters: parameters(&spec, &cal.machine, base.axis_index),
+        column: spec.column.clone(),
+        node: spec.node.clone(),
         delta_bic: cal.bic() - base.calibration.bic(),
         gain_pct: score::gain_pct(base.holdout, &h),
         score: score::joint_score(base.holdout, &h),
         sensor_gain_pct,
         holdout: h,
         calibration: cal,
+        spec: Some(spec),
     })
+}
+
+/// The input of a speed-growth extension (its drift entry's last input term).
+fn growth_input(s: &Spec, axis: usize) -> Option<&str> {
+    (s.cause == Cause::SpeedGrowth)
+        .then(|| {
+            s.machine.drift[axis]
+                .inputs
+                .last()
+                .map(|t| t.input.as_str())
+        })
+        .flatten()
+}
+
+/// Whether `a` models what the already accepted `b` models: the same cause on the same place
+/// (column for a source or a sensor, node for a nonlinear expansion, input for a speed growth;
+/// a lag or an ambient coupling is one per axis). Such a candidate is not fitted again.
+pub(super) fn overlaps(a: &Spec, b: &Spec, axis: usize) -> bool {
+    a.cause == b.cause
+        && match a.cause {
+            Cause::UnmodeledSource | Cause::SensorDrift => a.column == b.column,
+            Cause::NonlinearExpansion => a.node == b.node,
+            Cause::SpeedGrowth => growth_input(a, axis) == growth_input(b, axis),
+            Cause::ThermalLag | Cause::AmbientCoupling => true,
+        }
+}
+
+/// Whether `a` is the same extension as `b` (cause, column, node and input).
+pub(super) fn same(a: &Spec, b: &Spec, axis: usize) -> bool {
+    a.cause == b.cause
+        && a.column == b.column
+        && a.node == b.node
+        && growth_input(a, axis) == growth_input(b, axis)
+}
+
+/// The fitted parameters of extension `s` in the calibrated machine `m`, which may carry other
+/// extensions too: a source's link and a growth's input term are found by name, not as the last.
+pub(super) fn parameters(
+    s: &Spec,
+    m: &Machine,
+    axis: usize,
+) -> std::collections::BTreeMap<String, f64> {
+    let named = |pairs: &[(&str, f64)]| {
+        pairs
+            .iter()
+            .map(|&(k, v)| (k.to_string(), v))
+            .collect::<std::collections::BTreeMap<_, _>>()
+    };
+    match s.cause {
+        Cause::UnmodeledSource => {
+            let src = s.machine.links.last().map(|l| &l.between);
+            m.links
+                .iter()
+                .find(|l| Some(&l.between) == src)
+                .map_or_else(Default::default, |l| named(&[("w_per_k", l.w_per_k)]))
+        }
+        Cause::SpeedGrowth => {
+            let input = growth_input(s, axis);
+            m.drift[axis]
+                .inputs
+                .iter()
+                .find(|t| Some(t.input.as_str()) == input)
+                .map_or_else(Default::default, |t| {
+                    named(&[("um", t.um), ("exponent", t.exponent), ("ref", t.reference)])
+                })
+        }
+        c => c.parameters(m, axis, s.node.as_deref()),
+    }
+}
+
+/// The value of an extension parameter of machine `target` in the calibrated machine `from`
+/// (matched by name: node, link ends, input), in search space, within the parameter's bounds.
+fn carried(fp: &FreeParam, target: &Machine, from: &Machine) -> Option<f64> {
+    let v = match fp.param {
+        Param::Lag(d) => from.drift.get(d)?.lag_s,
+        Param::SensorDrift(i) => from
+            .node_index(&target.nodes.get(i)?.name)
+            .map(|j| from.nodes[j].sensor_drift_k_per_h),
+        Param::InputExponent(d, k) => {
+            let input = &target.drift.get(d)?.inputs.get(k)?.input;
+            from.drift
+                .get(d)?
+                .inputs
+                .iter()
+                .find(|t| &t.input == input)
+                .map(|t| t.exponent)
+        }
+        Param::Link(k) => {
+            let ends = &target.links.get(k)?.between;
+            from.links
+                .iter()
+                .find(|l| &l.between == ends)
+                .map(|l| l.w_per_k)
+        }
+        _ => None,
+    }?;
+    let v = if fp.log { v.max(1e-300).ln() } else { v };
+    v.is_finite().then(|| v.clamp(fp.lo, fp.hi))
+}
+
+/// `extra` (the extension parameters of machine `target`) starting from their values in the
+/// calibrated machine `from` where it has them.
+pub(super) fn carry(extra: &[FreeParam], target: &Machine, from: &Machine) -> Vec<FreeParam> {
+    extra
+        .iter()
+        .map(|fp| {
+            let mut fp = fp.clone();
+            if let Some(v) = carried(&fp, target, from) {
+                fp.start = v;
+            }
+            fp
+        })
+        .collect()
+}
+
+/// The extensions `chain` (accepted in this order, each spec carrying its own extension only)
+/// rebuilt on the nominal machine `m`: one spec whose machine holds them all and whose extra
+/// parameters are all of theirs. `None` if one of them cannot be rebuilt (it cannot happen for a
+/// chain that was built on `m`).
+pub(super) fn rebuild(
+    m: &Machine,
+    chain: &[&Spec],
+    axis: usize,
+    run: &RunView<'_>,
+) -> Option<Spec> {
+    let mut cur: Option<Spec> = None;
+    for own in chain {
+        let on = cur.as_ref().map_or(m, |c| &c.machine);
+        let cols: Vec<String> = own.column.iter().cloned().collect();
+        let next = own
+            .cause
+            .specs(on, axis, run, &cols)
+            .into_iter()
+            .find(|s| same(s, own, axis))?;
+        cur = Some(match cur {
+            None => next,
+            Some(prev) => {
+                let mut extra = prev.extra;
+                extra.extend(next.extra.iter().cloned());
+                Spec { extra, ..next }
+            }
+        });
+    }
+    cur
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::run::{NanPolicy, Run};
+
+    const TWO: &str = r#"
+name = "two"
+ambient = "T_ambient"
+[[nodes]]
+name = "a"
+capacity_j_per_k = 1000.0
+ambient_w_per_k = 2.0
+sensor = "T_a"
+[[nodes]]
+name = "b"
+capacity_j_per_k = 5000.0
+ambient_w_per_k = 4.0
+[[links]]
+between = ["a", "b"]
+w_per_k = 3.0
+[[sources]]
+node = "a"
+input = "U_rpm"
+w = 50.0
+ref = 1000.0
+exponent = 1.0
+[[drift]]
+axis = "E_z"
+um_per_k = { a = 1.0, b = 2.0 }
+"#;
+
+    #[test]
+    fn a_chain_is_rebuilt_without_one_of_its_extensions_and_keeps_its_fitted_values() {
+        let m = Machine::from_toml(TWO, "two.toml").unwrap();
+        let names = ["time_s", "T_ambient", "T_a", "U_rpm", "T_x", "T_y", "E_z"];
+        let cols = names
+            .iter()
+            .enumerate()
+            .map(|(j, _)| (0..20).map(|k| (k * (j + 1)) as f64).collect())
+            .collect();
+        let names = names.iter().map(|s| s.to_string()).collect();
+        let run = Run::from_columns("<t>", names, cols, NanPolicy::Error, None).unwrap();
+        let view = RunView::new(&run);
+        let on = |specs: Vec<Spec>, node: &str| {
+            specs
+                .into_iter()
+                .find(|s| s.node.as_deref() == Some(node))
+                .unwrap()
+        };
+        // accepted in this order: a source on T_x at a, a drifting T_a, a source on T_y at b
+        let s1 = on(unmodeled_source(&m, &["T_x".into()]), "a");
+        let s2 = on(sensor_drift(&s1.machine), "a");
+        let s3 = on(unmodeled_source(&s2.machine, &["T_y".into()]), "b");
+        let n = m.links.len();
+        let full = rebuild(&m, &[&s1, &s2, &s3], 0, &view).unwrap();
+        assert_eq!(full.machine.links.len(), n + 2);
+        assert_eq!(full.extra.len(), 3);
+        // without the first source, the second one's link moves down an index
+        let red = rebuild(&m, &[&s2, &s3], 0, &view).unwrap();
+        assert_eq!(red.machine.links.len(), n + 1);
+        assert_eq!(
+            red.machine.links[n].between,
+            ["b", "source_y"].map(String::from)
+        );
+        assert!(matches!(red.extra[1].param, Param::Link(k) if k == n));
+        // fitted values are carried by name, not by index
+        let mut fitted = full.machine.clone();
+        fitted.links[n].w_per_k = 0.5; // T_x → a
+        fitted.links[n + 1].w_per_k = 7.5; // T_y → b
+        fitted.nodes[0].sensor_drift_k_per_h = 0.2;
+        let carried = carry(&red.extra, &red.machine, &fitted);
+        assert_eq!(carried[0].start, 0.2);
+        assert!((carried[1].start - 7.5f64.ln()).abs() < 1e-12);
+        assert_eq!(parameters(&s1, &fitted, 0)["w_per_k"], 0.5);
+        assert_eq!(parameters(&s3, &fitted, 0)["w_per_k"], 7.5);
+        // the same cause on the same column is not tried again, on another column it is
+        let again = on(unmodeled_source(&full.machine, &["T_x".into()]), "b");
+        assert!(overlaps(&again, &s1, 0) && !overlaps(&s3, &s1, 0));
+        assert!(!overlaps(&s2, &s1, 0));
+    }
 }

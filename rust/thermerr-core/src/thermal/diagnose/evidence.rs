@@ -1,7 +1,17 @@
 //! The English sentence that states the verdict and the figures behind it.
 
+use super::rounds::{Accepted, Round, MIN_SHARE_OF_EXCESS};
 use super::verdict::{supported, Verdict};
 use super::{Candidate, Holdout};
+
+/// "cause on `column`", "cause on node `node`" or "cause".
+fn place(cause: impl std::fmt::Display, column: Option<&str>, node: Option<&str>) -> String {
+    match (column, node) {
+        (Some(col), _) => format!("{cause} on `{col}`"),
+        (None, Some(nd)) => format!("{cause} on node `{nd}`"),
+        (None, None) => cause.to_string(),
+    }
+}
 
 /// What the extension does to the held-out RMS error: it may only "cut" it when it is lower.
 fn error_change(axis: &str, base: &Holdout, c: &Candidate) -> String {
@@ -24,11 +34,7 @@ pub fn named(cands: &[Candidate], i: usize, base: &Holdout, axis: &str) -> Strin
         .iter()
         .map(|(k, v)| format!("{k} = {v:.4}"))
         .collect();
-    let what = match (&c.column, &c.node) {
-        (Some(col), _) => format!("{} on `{col}`", c.cause),
-        (None, Some(nd)) => format!("{} on node `{nd}`", c.cause),
-        (None, None) => c.cause.to_string(),
-    };
+    let what = place(c.cause, c.column.as_deref(), c.node.as_deref());
     let sensor = c
         .sensor_gain_pct
         .map(|g| format!(" and the held-out residual of that sensor by {g:.0} %"))
@@ -49,6 +55,76 @@ pub fn named(cands: &[Candidate], i: usize, base: &Holdout, axis: &str) -> Strin
         100.0 * c.score,
         c.delta_bic
     )
+}
+
+/// The sentence for a first named cause that was accepted after round 1 (round 1's cause was
+/// dropped by the backward check); `last`: the final model's held-out figures.
+pub fn named_later(c: &Accepted, base: &Holdout, last: &Holdout, axis: &str) -> String {
+    let params: Vec<String> = c
+        .params
+        .iter()
+        .map(|(k, v)| format!("{k} = {v:.4}"))
+        .collect();
+    format!(
+        "The first cause that passes the backward check is {} ({}), accepted in round {}; with the other named causes the held-out RMS error of {axis} falls from {:.2} to {:.2} µm.",
+        place(c.cause, c.column.as_deref(), c.node.as_deref()),
+        params.join(", "),
+        c.round,
+        base.rmse_um,
+        last.rmse_um
+    )
+}
+
+/// The sentences on the rounds after the first, on the causes the backward check dropped and on
+/// the remainder (`named`: some cause is named). Empty when round 1 was the only round.
+pub fn rounds(
+    rounds: &[Round],
+    dropped: &[Accepted],
+    remainder_um: f64,
+    noise_um: f64,
+    axis: &str,
+    named: bool,
+) -> String {
+    let mut out = String::new();
+    for r in rounds.iter().filter(|r| r.round > 1) {
+        let what = r
+            .cause
+            .map(|c| place(c, r.column.as_deref(), r.node.as_deref()));
+        match (what, r.accepted) {
+            (Some(what), true) => out.push_str(&format!(
+                " Round {} adds {what}, fitted together with the causes before it: the held-out RMS error of {axis} falls from {:.2} to {:.2} µm ({:.0} %), {:.0} % of what stayed above the probe noise, ΔBIC = {:.0}.",
+                r.round,
+                r.rmse_before_um,
+                r.rmse_um,
+                r.gain_pct,
+                100.0 * r.excess_share,
+                r.delta_bic
+            )),
+            (Some(what), false) => out.push_str(&format!(
+                " In round {} no further extension passes (best: {what}, removing {:.0} % of what stays above the probe noise, {:.0} % needed).",
+                r.round,
+                100.0 * r.excess_share.max(0.0),
+                100.0 * MIN_SHARE_OF_EXCESS
+            )),
+            (None, _) => out.push_str(&format!(
+                " In round {} no further extension lowers the held-out error.",
+                r.round
+            )),
+        }
+    }
+    for d in dropped {
+        out.push_str(&format!(
+            " {} (round {}) is dropped: refitted without it, the other causes explain the held-out data as well.",
+            place(d.cause, d.column.as_deref(), d.node.as_deref()),
+            d.round
+        ));
+    }
+    if named && remainder_um > 0.0 {
+        out.push_str(&format!(
+            " A structured held-out residual of {remainder_um:.2} µm RMS above the probe noise ({noise_um:.2} µm) remains that no catalogued cause explains."
+        ));
+    }
+    out
 }
 
 /// The sentence when no cause is named (`verdict` is `none` or `unexplained`).

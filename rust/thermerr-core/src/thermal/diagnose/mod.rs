@@ -6,10 +6,13 @@
 //!
 //! [`cause`] is the catalogue, [`candidates`] builds and fits the extended machines, [`score`]
 //! measures them on the held-out data, [`verdict`] applies the rule and [`evidence`] words it.
+//! [`rounds`] goes on after a named cause: the extended machine becomes the baseline and the
+//! catalogue is tried again, for several effects at once.
 
 pub mod candidates;
 pub mod cause;
 pub mod evidence;
+pub mod rounds;
 pub mod score;
 pub mod verdict;
 
@@ -28,13 +31,14 @@ use rayon::prelude::*;
 use serde::{Serialize, Serializer};
 
 pub use cause::Cause;
+pub use rounds::{Accepted, Round, MAX_ROUNDS, MIN_SHARE_OF_EXCESS};
 pub use verdict::Verdict;
 
-use super::calibrate::{calibrate, evaluate, targets, Calibration, CalibrationOptions};
+use super::calibrate::{calibrate, evaluate, targets, Calibration, CalibrationOptions, FreeParam};
 use super::machine::Machine;
 use super::sim::RunView;
 use crate::error::{Error, Result};
-use candidates::Baseline;
+use candidates::{Baseline, Spec};
 use score::HeldOut;
 
 /// Options of [`diagnose`].
@@ -112,6 +116,10 @@ pub struct Candidate {
     pub parameters: BTreeMap<String, f64>,
     #[serde(skip)]
     pub calibration: Calibration,
+    /// The extended machine before fitting and its extra parameters (those of the causes
+    /// accepted in earlier rounds, then its own).
+    #[serde(skip)]
+    pub spec: Option<candidates::Spec>,
 }
 
 fn rmse_only<S: Serializer>(h: &Holdout, s: S) -> std::result::Result<S::Ok, S::Error> {
@@ -128,10 +136,19 @@ pub struct Diagnosis {
     pub noise_um: f64,
     pub baseline: Calibration,
     pub baseline_holdout: Holdout,
-    /// Sorted by score, best first.
+    /// Round 1's candidates, sorted by score, best first.
     pub candidates: Vec<Candidate>,
-    /// Index in `candidates` of the named cause, if any.
+    /// Index in `candidates` of round 1's named cause, if it is still named after the rounds.
     pub chosen: Option<usize>,
+    /// The named causes in the order accepted (the first is the verdict).
+    pub causes: Vec<Accepted>,
+    /// Causes accepted in a round and dropped by the backward check.
+    pub dropped: Vec<Accepted>,
+    pub rounds: Vec<Round>,
+    /// The final model (every named cause), its figures against the baseline.
+    pub joint: Option<Candidate>,
+    /// Held-out RMS above the noise that the final model leaves, when above the noise ratio.
+    pub remainder_um: f64,
     /// Unused `T_*` columns not tried as a source (beyond [`MAX_SOURCE_COLUMNS`] or the cap).
     pub untried_columns: Vec<String>,
     /// The training run's source.
@@ -158,24 +175,29 @@ pub struct Report<'a> {
     pub machine: &'a str,
     pub candidates: &'a [Candidate],
     pub untried_columns: &'a [String],
+    pub causes: &'a [Accepted],
+    pub remainder_um: f64,
+    pub rounds: &'a [Round],
 }
 
 impl Diagnosis {
-    /// The extended machine: the chosen candidate's, or the baseline when nothing was named.
+    /// The extended machine: the final model with every named cause, or the baseline when
+    /// nothing was named.
     pub fn extended(&self) -> &Machine {
-        self.chosen
-            .map(|i| &self.candidates[i].calibration.machine)
-            .unwrap_or(&self.baseline.machine)
+        self.joint
+            .as_ref()
+            .map_or(&self.baseline.machine, |j| &j.calibration.machine)
     }
 
     pub fn extended_holdout(&self) -> &Holdout {
-        self.chosen
-            .map(|i| &self.candidates[i].holdout)
-            .unwrap_or(&self.baseline_holdout)
+        self.joint
+            .as_ref()
+            .map_or(&self.baseline_holdout, |j| &j.holdout)
     }
 
+    /// The held-out gain of the extended machine over the baseline (%).
     pub fn gain_pct(&self) -> f64 {
-        self.chosen.map_or(0.0, |i| self.candidates[i].gain_pct)
+        self.joint.as_ref().map_or(0.0, |j| j.gain_pct)
     }
 
     /// The report; `machine` names the machine file.
@@ -194,8 +216,93 @@ impl Diagnosis {
             machine,
             candidates: &self.candidates,
             untried_columns: &self.untried_columns,
+            causes: &self.causes,
+            remainder_um: self.remainder_um,
+            rounds: &self.rounds,
         }
     }
+}
+
+/// What every round's candidates are fitted on.
+struct RoundInput<'r, 'a> {
+    train: &'r RunView<'a>,
+    held: &'r HeldOut<'r, 'a>,
+    split: usize,
+    axis: &'r str,
+}
+
+/// One round's candidates, fitted and sorted by score (best first), and the unused `T_*`
+/// columns not tried. `mk`: the machine the extensions are built on (the nominal one, plus the
+/// extensions accepted so far); `base`: the current model; `carried`: the accepted extensions'
+/// parameters (fitted again with every candidate, from their current values); `taken`: the
+/// accepted extensions, whose cause and place are not tried again.
+fn round_candidates(
+    cx: &RoundInput<'_, '_>,
+    mk: &Machine,
+    base: &Baseline<'_>,
+    carried: &[FreeParam],
+    taken: &[&Spec],
+) -> Result<(Vec<Candidate>, Vec<String>)> {
+    let (train, split, axis, axis_index) = (cx.train, cx.split, cx.axis, base.axis_index);
+    let current = base.calibration;
+    let free = candidates::free_columns(mk, train);
+    let ranked = if free.len() > MAX_SOURCE_COLUMNS {
+        let tg = targets(&current.machine, train, axis)?;
+        let (_, sim, _) = evaluate(
+            &current.machine,
+            &current.init,
+            train,
+            &tg,
+            split,
+            current.sigma_t,
+            current.sigma_e,
+            false,
+        )?;
+        let residual: Vec<f64> = sim.drift[axis_index].1[..split]
+            .iter()
+            .zip(&tg.measured_e[..split])
+            .map(|(p, y)| y - p)
+            .collect();
+        candidates::rank_by_residual(free, train, &residual)?
+    } else {
+        free
+    };
+    let n_tried = ranked.len().min(MAX_SOURCE_COLUMNS);
+    let mut untried_columns = ranked[n_tried..].to_vec();
+    let mut specs: Vec<_> = Cause::ALL
+        .into_iter()
+        .flat_map(|c| c.specs(mk, axis_index, train, &ranked[..n_tried]))
+        .filter(|s| !taken.iter().any(|t| candidates::overlaps(s, t, axis_index)))
+        .collect();
+    if specs.len() > MAX_CANDIDATES {
+        // drop the unmodelled-source pairs of the lowest-ranked columns until the cap holds
+        for col in ranked[..n_tried].iter().rev() {
+            if specs.len() <= MAX_CANDIDATES {
+                break;
+            }
+            specs.retain(|s| {
+                !(s.cause == Cause::UnmodeledSource && s.column.as_deref() == Some(col.as_str()))
+            });
+            untried_columns.insert(0, col.clone());
+        }
+        specs.truncate(MAX_CANDIDATES);
+    }
+    if !carried.is_empty() {
+        for s in specs.iter_mut() {
+            let own = std::mem::take(&mut s.extra);
+            s.extra = carried.iter().cloned().chain(own).collect();
+        }
+    }
+    crate::interrupt::check()?;
+    let mut cands = specs
+        .into_par_iter()
+        .map(|spec| {
+            crate::interrupt::check()?;
+            candidates::fit(spec, base, train, cx.held)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    cands.sort_by(|a, b| b.score.total_cmp(&a.score));
+    Ok((cands, untried_columns))
 }
 
 /// Runs the whole diagnosis. `hold`: a separate held-out run; without one the last
@@ -263,62 +370,56 @@ pub fn diagnose(
     };
     // extensions are built on the nominal machine, so that bounds and priors are the baseline's
     // (centred on the user's estimate); the search starts from the calibrated values
-    let free = candidates::free_columns(m, train);
-    let ranked = if free.len() > MAX_SOURCE_COLUMNS {
-        let tg = targets(&baseline.machine, train, &axis)?;
-        let (_, sim, _) = evaluate(
-            &baseline.machine,
-            &baseline.init,
-            train,
-            &tg,
-            split,
-            baseline.sigma_t,
-            baseline.sigma_e,
-            false,
-        )?;
-        let residual: Vec<f64> = sim.drift[axis_index].1[..split]
-            .iter()
-            .zip(&tg.measured_e[..split])
-            .map(|(p, y)| y - p)
-            .collect();
-        candidates::rank_by_residual(free, train, &residual)?
-    } else {
-        free
+    let cx = RoundInput {
+        train,
+        held: &held,
+        split,
+        axis: &axis,
     };
-    let n_tried = ranked.len().min(MAX_SOURCE_COLUMNS);
-    let mut untried_columns = ranked[n_tried..].to_vec();
-    let mut specs: Vec<_> = Cause::ALL
-        .into_iter()
-        .flat_map(|c| c.specs(m, axis_index, train, &ranked[..n_tried]))
-        .collect();
-    if specs.len() > MAX_CANDIDATES {
-        // drop the unmodelled-source pairs of the lowest-ranked columns until the cap holds
-        for col in ranked[..n_tried].iter().rev() {
-            if specs.len() <= MAX_CANDIDATES {
-                break;
-            }
-            specs.retain(|s| {
-                !(s.cause == Cause::UnmodeledSource && s.column.as_deref() == Some(col.as_str()))
-            });
-            untried_columns.insert(0, col.clone());
-        }
-        specs.truncate(MAX_CANDIDATES);
-    }
-    crate::interrupt::check()?;
-    let mut cands = specs
-        .into_par_iter()
-        .map(|spec| {
-            crate::interrupt::check()?;
-            candidates::fit(spec, &base, train, &held)
-        })
-        .collect::<Result<Vec<_>>>()?;
-    cands.sort_by(|a, b| b.score.total_cmp(&a.score));
+    let (cands, untried_columns) = round_candidates(&cx, m, &base, &[], &[])?;
     let noise = baseline.sigma_e;
-    let (verdict, chosen) = verdict::rule(&cands, &base_hold, noise, opts);
-    let evidence = match chosen {
-        Some(i) => evidence::named(&cands, i, &base_hold, &axis),
-        None => evidence::unnamed(verdict, &cands, &base_hold, noise, &axis, opts.min_score),
+    let (verdict1, chosen1) = verdict::rule(&cands, &base_hold, noise, opts);
+    let outcome = rounds::run(
+        &rounds::Context {
+            nominal: m,
+            train,
+            held: &held,
+            axis: &axis,
+            opts,
+            noise,
+        },
+        &base,
+        &cands,
+        chosen1,
+        |mk, b, carried, taken| Ok(round_candidates(&cx, mk, b, carried, taken)?.0),
+    )?;
+    let first = outcome.causes.first();
+    let verdict = match (first, chosen1) {
+        (Some(c), _) => Verdict::Cause(c.cause),
+        // every accepted cause was dropped: the baseline's verdict
+        (None, Some(_)) if base_hold.rmse_um / noise <= opts.noise_ratio => Verdict::None,
+        (None, Some(_)) => Verdict::Unexplained,
+        (None, None) => verdict1,
     };
+    let chosen = chosen1.filter(|_| first.is_some_and(|c| c.round == 1));
+    let column = first.and_then(|c| c.column.clone());
+    let final_hold = outcome.joint.as_ref().map_or(&base_hold, |j| &j.holdout);
+    let remainder_um = rounds::remainder_um(final_hold, noise, opts);
+    let mut evidence = match (chosen, first) {
+        (Some(i), _) => evidence::named(&cands, i, &base_hold, &axis),
+        (None, Some(c)) => evidence::named_later(c, &base_hold, final_hold, &axis),
+        (None, None) => {
+            evidence::unnamed(verdict, &cands, &base_hold, noise, &axis, opts.min_score)
+        }
+    };
+    evidence.push_str(&evidence::rounds(
+        &outcome.rounds,
+        &outcome.dropped,
+        remainder_um,
+        noise,
+        &axis,
+        !outcome.causes.is_empty(),
+    ));
     let (holdout_label, holdout_time, holdout_measured) = match hold {
         Some(h) => (
             format!("the separate run {}", h.source),
@@ -338,7 +439,7 @@ pub fn diagnose(
         ),
     };
     Ok(Diagnosis {
-        column: chosen.and_then(|i| cands[i].column.clone()),
+        column,
         axis,
         verdict,
         evidence,
@@ -348,6 +449,11 @@ pub fn diagnose(
         candidates: cands,
         chosen,
         untried_columns,
+        causes: outcome.causes,
+        dropped: outcome.dropped,
+        rounds: outcome.rounds,
+        joint: outcome.joint,
+        remainder_um,
         run: train.source.clone(),
         holdout_label,
         holdout_time,
@@ -402,6 +508,7 @@ pub(crate) mod tests {
                 n_iter: 1,
                 converged: true,
             },
+            spec: None,
         }
     }
 
