@@ -163,6 +163,14 @@ def test_the_guard_is_saved_loaded_and_dropped_on_refit(guarded, example_run1):
     assert "guard" not in back.to_dict()
 
 
+def test_progress_names_each_fallback(example_run1):
+    run = tr.read_run(example_run1)
+    model = tr.MLR().fit_run(run, "E_z", SENSORS, inputs="rise")
+    seen: list[tuple[int, int, str]] = []
+    tr.add_guard(model, run, progress=lambda k, n, s: seen.append((k, n, s)))
+    assert seen == [(k + 1, 4, s) for k, s in enumerate(SENSORS)]
+
+
 def test_a_sequential_model_gets_limits_but_no_fallbacks(example_run1):
     run = tr.read_run(example_run1)
     model = tr.GM1N(window=8).fit_run(run, "E_z", SENSORS[:2], inputs="rise")
@@ -195,6 +203,10 @@ def test_cli_fit_writes_a_guard_unless_told_not_to(example_run1, tmp_path):
     assert main(["fit", str(example_run1), "--axis", "E_z", "--sensors", ",".join(SENSORS), "--out", str(out),
                  "--no-guard", "--quiet"]) == 0
     assert "guard" not in json.loads(out.read_text())
+    assert main(["fit", str(example_run1), "--axis", "E_z", "--sensors", ",".join(SENSORS), "--out", str(out),
+                 "--no-fallbacks", "--quiet"]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["guard"]["fallbacks"] == [] and len(doc["guard"]["sensors"]) == 4
     with pytest.raises(SystemExit) as e:
         main(["fit", str(example_run1), "--axis", "E_z", "--out", str(out), "--hold", "-1"])
     assert e.value.code == 2

@@ -228,7 +228,11 @@ def cmd_fit(args: argparse.Namespace) -> int:
         from .guard import add_guard
 
         _stage(args, "learning the sensor-fault guard")
-        add_guard(model, run, hold_s=args.hold)
+
+        def fallback(k: int, n: int, sensor: str) -> None:
+            _stage(args, f"fallback model {k}/{n} (without {sensor}; --no-fallbacks skips them)")
+
+        add_guard(model, run, hold_s=args.hold, fallbacks=not args.no_fallbacks, progress=fallback)
         n_fb = len(model.guard_["fallbacks"])
         report["guard"] = {"hold_s": args.hold, "fallbacks": n_fb}
         _say(args, f"sensor-fault guard: limits for {len(sensors)} sensors, hold {args.hold:g} s, "
@@ -453,6 +457,9 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--no-guard", action="store_true",
                    help="write no sensor-fault guard (default: limits learnt from the run and, for mlr/rbf/svr/bp, "
                         "one fallback model without each sensor, for thermerr-edge)")
+    f.add_argument("--no-fallbacks", action="store_true",
+                   help="a guard without fallback models (one fit fewer per sensor): a sensor out beyond --hold "
+                        "freezes the output")
     f.add_argument("--hold", type=_nonneg_float, default=300.0,
                    help="seconds the edge holds a faulty sensor's last good reading before it falls back (default 300)")
     f.add_argument("--out", required=True, help="model file to write (JSON)")

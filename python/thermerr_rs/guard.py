@@ -14,7 +14,7 @@ their numbers are the core's (``thermerr_core::guard``); docs/edge.md explains t
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -47,12 +47,15 @@ def _features(model: Estimator) -> list[str]:
     return list(names)
 
 
-def add_guard(model: Estimator, run: Run, *, hold_s: float = DEFAULT_HOLD_S, fallbacks: bool = True) -> Estimator:
+def add_guard(model: Estimator, run: Run, *, hold_s: float = DEFAULT_HOLD_S, fallbacks: bool = True,
+              progress: Callable[[int, int, str], None] | None = None) -> Estimator:
     """Learn sensor-fault limits from ``run`` (the model's training run) and, with ``fallbacks``,
     fit one model without each sensor (same estimator and parameters, same run); store them in
     ``model.guard_``, written into the model file by ``save``. Fallbacks are fitted only for
     models whose prediction depends on the current sample alone (MLR, RBF, SVR, BP); for the
-    others a sensor out beyond ``hold_s`` freezes the output. Returns ``model``."""
+    others a sensor out beyond ``hold_s`` freezes the output. The fallbacks cost one fit per
+    sensor (``fallbacks=False`` skips them); ``progress(k, n, sensor)`` is called before each.
+    Returns ``model``."""
     from sklearn.base import clone
 
     features = _features(model)
@@ -65,7 +68,9 @@ def add_guard(model: Estimator, run: Run, *, hold_s: float = DEFAULT_HOLD_S, fal
     history = getattr(model, "input_history_", None)
     taus = history["tau_s"] if history else None
     if fallbacks and takes_fallbacks and len(features) >= 2:
-        for name in features:
+        for k, name in enumerate(features):
+            if progress is not None:
+                progress(k + 1, len(features), name)
             rest = [f for f in features if f != name]
             reduced = clone(model).fit_run(run, target, rest, inputs=model.inputs_, history=taus)
             guard["fallbacks"].append({"without": name, "model": reduced.to_dict()})
