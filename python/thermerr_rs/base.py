@@ -49,6 +49,10 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
     #: or ``"rise"`` (each reading minus the run's first sample, like the error itself)
     inputs_: str = "absolute"
     n_features_in_: int
+    #: the model file's ``history`` entry when fitted with ``fit_run(..., history=...)``
+    input_history_: dict[str, Any] | None = None
+    #: the model file's ``guard`` entry when given one by :func:`thermerr_rs.add_guard`
+    guard_: dict[str, Any] | None = None
     #: the fitted model (Rust, or the fitted inner estimator of a wrapper); None until ``fit``
     _inner: Any = None
     #: scikit-learn estimator checks this class fails on purpose, with the reason: given to

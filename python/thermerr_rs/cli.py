@@ -233,7 +233,9 @@ def cmd_fit(args: argparse.Namespace) -> int:
             _stage(args, f"fallback model {k}/{n} (without {sensor}; --no-fallbacks skips them)")
 
         add_guard(model, run, hold_s=args.hold, fallbacks=not args.no_fallbacks, progress=fallback)
-        n_fb = len(model.guard_["fallbacks"])
+        guard = model.guard_
+        assert guard is not None  # add_guard sets it
+        n_fb = len(guard["fallbacks"])
         report["guard"] = {"hold_s": args.hold, "fallbacks": n_fb}
         _say(args, f"sensor-fault guard: limits for {len(sensors)} sensors, hold {args.hold:g} s, "
                    f"{n_fb} fallback models" + ("" if n_fb else " (the output freezes when a sensor stays out)"))
