@@ -28,6 +28,7 @@ from .guard import GuardedPrediction, add_guard, predict_guarded
 from .hybrid import HybridFilterNet
 from .linear import MLR
 from .metrics import Scores, scores
+from .model_selection import ModelSelection, select_model
 from .preprocessing import AGORegressor, MinMaxAGO, MinMaxScaled, spread_search
 from .rbf import RBFNetwork
 from .run import Run, read_run
@@ -55,6 +56,8 @@ __all__ = [
     "add_guard",
     "predict_guarded",
     "GuardedPrediction",
+    "select_model",
+    "ModelSelection",
     "MLR",
     "FuzzyCMeans",
     "SensorSelection",

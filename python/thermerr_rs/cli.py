@@ -209,13 +209,29 @@ def cmd_fit(args: argparse.Namespace) -> int:
     sensors = _sensors(args, run)
     run.check_fit_columns(args.axis, sensors)
     args._max_abs_error = float(abs(run[args.axis]).max())
-    if args.model == "svr":
-        model = _make_svr(args, run, sensors)
+    selection = None
+    if args.model == "auto":
+        from .model_selection import select_model
+
+        def step(k: int, n: int, label: str) -> None:
+            _stage(args, f"candidate {k}/{n}: {label}")
+
+        selection = select_model(run, args.axis, sensors, history=args.history, inputs=args.inputs, cv=args.cv,
+                                 gap=args.gap, budget_s=args.budget, seed=args.seed, progress=step)
+        model = selection.model
+        _say(args, f"leaderboard ({selection.n_splits} time-ordered splits of the training run, gap {selection.gap}):")
+        _say(args, "  " + str(selection).replace("\n", "\n  "))
     else:
-        model = _make_model(args, len(run))
-    model.fit_run(run, args.axis, sensors, inputs=args.inputs, history=args.history)
-    _say(args, f"fitted {args.model} on {len(run)} samples of {run.source}: {args.axis} from {', '.join(sensors)}")
-    report: dict[str, Any] = {"model": args.model, "axis": args.axis, "sensors": sensors}
+        if args.model == "svr":
+            model = _make_svr(args, run, sensors)
+        else:
+            model = _make_model(args, len(run))
+        model.fit_run(run, args.axis, sensors, inputs=args.inputs, history=args.history)
+    name = selection.best.candidate.label() if selection is not None else args.model
+    _say(args, f"fitted {name} on {len(run)} samples of {run.source}: {args.axis} from {', '.join(sensors)}")
+    report: dict[str, Any] = {"model": name, "axis": args.axis, "sensors": sensors}
+    if selection is not None:
+        report["selection"] = selection.to_dict()
     train = scores(run[args.axis], model.predict_run(run))
     report["train"] = train.as_dict()
     _print_scores(args, "training run", train)
@@ -417,7 +433,11 @@ def build_parser() -> argparse.ArgumentParser:
     f = sub.add_parser("fit", help="fit a thermal error model to a run and save it")
     f.add_argument("run", help="measured run CSV")
     f.add_argument("--axis", required=True, help="error column to model, e.g. E_z")
-    f.add_argument("--model", choices=["mlr", "rbf", "svr", "greybp", "gm1n", "bp", "hybrid"], default="mlr")
+    f.add_argument("--model", choices=["mlr", "rbf", "svr", "greybp", "gm1n", "bp", "hybrid", "auto"], default="mlr",
+                   help="family to fit, or 'auto': MLR, RBF and SVR candidates (with and without --history) scored "
+                        "on --cv time-ordered splits of the run, the best refitted (default mlr)")
+    f.add_argument("--budget", type=float, default=None, metavar="SECONDS",
+                   help="--model auto: start no new candidate after this many seconds")
     f.add_argument("--sensors", default="all", help="'all' (default), 'auto' (fuzzy c-means selection) or T_a,T_b,...")
     f.add_argument("--n-clusters", type=_positive_int, default=4, help="clusters for --sensors auto (default 4)")
     f.add_argument("--seed", type=_nonneg_int, default=0, help="seed of every stochastic step (default 0)")
@@ -432,7 +452,7 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--gamma", type=float, default=None, help="SVR RBF gamma (default: 'scale'; searched with --tune)")
     f.add_argument("--tune", choices=["cso", "pso"], default=None,
                    help="search SVR C and gamma by cross-validated MSE with chicken swarm or particle swarm (seed 004)")
-    f.add_argument("--cv", type=_positive_int, default=5, help="splits of the --tune search (default 5)")
+    f.add_argument("--cv", type=_positive_int, default=5, help="splits of the --tune search and of --model auto (default 5)")
     f.add_argument("--cv-kind", choices=["time", "kfold"], default="time",
                    help="time: each split trains on the samples before its test block (scikit-learn's "
                         "TimeSeriesSplit, default); kfold: the seed's shuffled folds (trains on later samples too)")

@@ -1,0 +1,173 @@
+"""Model selection on a run: every family, time-ordered folds of the training run only.
+
+:func:`select_model` scores a small, fixed set of candidates per family (MLR; RBF k-means over
+centres and spread; SVR over C and gamma; each with and without temperature history) by the
+mean held-out RMS of time-ordered splits (:func:`thermerr_rs.time_series_split`: each split trains
+on the samples before its test block). The inputs (rises, history filters) are built over the
+whole training run first, as a gateway running since the run's start would see them; only the
+fit is restricted to each split's training rows. The winner is refitted on the whole run.
+
+The leaderboard lists, per candidate: the CV RMS and its spread over splits, the median fit time
+of one split, and the prediction time per sample through the library (Python call included; the
+edge's own latency is measured by ``thermerr-edge --bench-latency``). Deterministic for a seed. A budget in
+seconds stops starting new candidates once spent (the ones scored so far are ranked).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .base import Estimator, _history, run_inputs
+from .errors import ParameterError
+from .folds import time_series_split
+from .run import Run
+
+#: families :func:`select_model` knows, in the order they are tried
+FAMILIES: tuple[str, ...] = ("mlr", "rbf", "svr")
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One estimator setting of a family (``history``: time constants in s, or None)."""
+
+    family: str
+    params: dict[str, Any]
+    history: tuple[float, ...] | None
+
+    def make(self, seed: int) -> Estimator:
+        from .linear import MLR
+        from .rbf import RBFNetwork
+        from .svr import SVR
+
+        if self.family == "mlr":
+            return MLR(**self.params)
+        if self.family == "rbf":
+            return RBFNetwork(design="kmeans", seed=seed, **self.params)
+        if self.family == "svr":
+            return SVR(**self.params)
+        raise ParameterError(f"unknown family {self.family!r} (known: {', '.join(FAMILIES)})")
+
+    def label(self) -> str:
+        parts = [f"{k}={v}" for k, v in self.params.items() if k != "epsilon"]
+        if self.history:
+            parts.append("history=" + "/".join(f"{t:g}" for t in self.history))
+        return f"{self.family}({', '.join(parts)})"
+
+
+def candidates(families: Sequence[str], history: Sequence[float] | None) -> list[Candidate]:
+    """The fixed grid: MLR; RBF k-means with 10/20/40 centres × spread 0.5/1/2 (in the inputs'
+    units, K of rise); SVR with C 1/10/100 × gamma 0.01/0.1/'scale'. With ``history``, each again
+    with those time constants."""
+    grid: dict[str, list[dict[str, Any]]] = {
+        "mlr": [{}],
+        "rbf": [{"n_centers": k, "spread": s} for k in (10, 20, 40) for s in (0.5, 1.0, 2.0)],
+        "svr": [{"C": c, "gamma": g, "epsilon": 0.1} for c in (1.0, 10.0, 100.0) for g in (0.01, 0.1, "scale")],
+    }
+    unknown = [f for f in families if f not in grid]
+    if unknown:
+        raise ParameterError(f"unknown families {unknown} (known: {', '.join(FAMILIES)})")
+    hists: list[tuple[float, ...] | None] = [None]
+    if history:
+        hists.append(tuple(float(t) for t in history))
+    return [Candidate(f, p, h) for h in hists for f in families for p in grid[f]]
+
+
+@dataclass
+class Entry:
+    candidate: Candidate
+    cv_rms: float
+    cv_rms_std: float
+    fit_s: float
+    predict_us: float
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"model": self.candidate.label(), "family": self.candidate.family,
+                "params": self.candidate.params, "history": list(self.candidate.history or []) or None,
+                "cv_rms_um": self.cv_rms, "cv_rms_std_um": self.cv_rms_std, "fit_s": self.fit_s,
+                "predict_us_per_sample": self.predict_us}
+
+
+@dataclass
+class ModelSelection:
+    """Result of :func:`select_model`: the ``leaderboard`` (best first), the winner refitted on
+    the whole run (``model``), the splits used, and candidates not scored within the budget."""
+
+    leaderboard: list[Entry]
+    model: Estimator
+    n_splits: int
+    gap: int
+    skipped: list[str] = field(default_factory=list)
+
+    @property
+    def best(self) -> Entry:
+        return self.leaderboard[0]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"leaderboard": [e.as_dict() for e in self.leaderboard], "n_splits": self.n_splits,
+                "gap": self.gap, "skipped": self.skipped}
+
+    def __str__(self) -> str:
+        return self.table()
+
+    def table(self, top: int | None = 10) -> str:
+        """The leaderboard as text, the ``top`` best (all with ``None``)."""
+        lines = [f"{'model':44s} {'CV RMS µm':>10s} {'±':>7s} {'fit s':>7s} {'µs/sample':>9s}"]
+        shown = self.leaderboard if top is None else self.leaderboard[:top]
+        for e in shown:
+            lines.append(f"{e.candidate.label():44s} {e.cv_rms:10.3f} {e.cv_rms_std:7.3f} {e.fit_s:7.2f} "
+                         f"{e.predict_us:9.2f}")
+        if len(shown) < len(self.leaderboard):
+            lines.append(f"... and {len(self.leaderboard) - len(shown)} more (to_dict() / --json has them all)")
+        if self.skipped:
+            lines.append(f"({len(self.skipped)} candidates not scored within the budget)")
+        return "\n".join(lines)
+
+
+def select_model(run: Run, axis: str, features: Sequence[str], *, families: Sequence[str] = FAMILIES,
+                 history: Sequence[float] | None = None, inputs: str = "rise", cv: int = 5, gap: int = 0,
+                 budget_s: float | None = None, seed: int = 0,
+                 progress: Callable[[int, int, str], None] | None = None) -> ModelSelection:
+    """Score every candidate of ``families`` on time-ordered splits of ``run`` (the training run
+    only), rank them by mean held-out RMS, refit the best on the whole run and return both."""
+    features = list(features)
+    run.check_fit_columns(axis, features)
+    if budget_s is not None and not budget_s > 0:
+        raise ParameterError(f"budget_s must be > 0 seconds, got {budget_s}")
+    y = np.asarray(run[axis], dtype=np.float64)
+    splits = time_series_split(len(run), cv, gap=gap)
+    cands = candidates(families, history)
+    inputs_by_hist: dict[tuple[float, ...] | None, np.ndarray] = {}
+    board: list[Entry] = []
+    skipped: list[str] = []
+    start = time.perf_counter()
+    for k, c in enumerate(cands):
+        if budget_s is not None and board and time.perf_counter() - start > budget_s:
+            skipped.append(c.label())
+            continue
+        if progress is not None:
+            progress(k + 1, len(cands), c.label())
+        if c.history not in inputs_by_hist:
+            inputs_by_hist[c.history] = run_inputs(run, features, inputs, _history(c.history, run.time_s))
+        x = inputs_by_hist[c.history]
+        rms, fit_s, pred_us = [], [], []
+        for train, test in splits:
+            m = c.make(seed)
+            t0 = time.perf_counter()
+            m.fit(x[train], y[train])
+            t1 = time.perf_counter()
+            pred = m.predict(x[test])
+            t2 = time.perf_counter()
+            rms.append(float(np.sqrt(np.mean((y[test] - pred) ** 2))))
+            fit_s.append(t1 - t0)
+            pred_us.append((t2 - t1) / len(test) * 1e6)
+        board.append(Entry(c, float(np.mean(rms)), float(np.std(rms)), float(np.median(fit_s)),
+                           float(np.median(pred_us))))
+    board.sort(key=lambda e: (e.cv_rms, e.fit_s))
+    win = board[0].candidate
+    model = win.make(seed).fit_run(run, axis, features, inputs=inputs, history=win.history)
+    return ModelSelection(board, model, len(splits), gap, skipped)

@@ -1,0 +1,73 @@
+"""Model selection (issue 12 point 2): candidates scored on time-ordered splits of the training run
+only, ranked by held-out RMS, the winner refitted; reproducible from the seed."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import thermerr_rs as tr
+from thermerr_rs.model_selection import candidates, select_model
+
+SENSORS = ["T_s01", "T_s07", "T_s10", "T_s13"]
+
+
+def test_the_leaderboard_is_the_time_ordered_cv_of_each_candidate(example_run1):
+    run = tr.read_run(example_run1)
+    sel = select_model(run, "E_z", SENSORS, families=["mlr", "svr"], cv=4)
+    assert len(sel.leaderboard) == 1 + 9
+    rms = [e.cv_rms for e in sel.leaderboard]
+    assert rms == sorted(rms)
+    # recompute the MLR entry by hand on the same splits
+    x = run.input_matrix(SENSORS, "rise")
+    y = run["E_z"]
+    by_hand = []
+    for train, test in tr.time_series_split(len(run), 4):
+        assert train.max() < test.min()
+        m = tr.MLR().fit(x[train], y[train])
+        by_hand.append(np.sqrt(np.mean((y[test] - m.predict(x[test])) ** 2)))
+    mlr = next(e for e in sel.leaderboard if e.candidate.family == "mlr")
+    assert mlr.cv_rms == pytest.approx(float(np.mean(by_hand)), rel=1e-12)
+    # the winner is refitted on the whole run with its settings
+    best = sel.best.candidate
+    assert type(sel.model).__name__.lower() == best.family
+    assert sel.model.n_features_in_ == len(SENSORS)
+
+
+def test_same_seed_same_board(example_run1):
+    run = tr.read_run(example_run1)
+    a = select_model(run, "E_z", SENSORS, families=["rbf"], cv=3, seed=4)
+    b = select_model(run, "E_z", SENSORS, families=["rbf"], cv=3, seed=4)
+    assert [e.cv_rms for e in a.leaderboard] == [e.cv_rms for e in b.leaderboard]
+
+
+def test_history_doubles_the_candidates_and_is_refitted_with_the_winner(example_run1):
+    assert len(candidates(["mlr", "rbf", "svr"], [900.0])) == 2 * (1 + 9 + 9)
+    run = tr.read_run(example_run1)
+    sel = select_model(run, "E_z", SENSORS, families=["mlr"], history=[900.0, 3600.0], cv=3)
+    best = sel.best.candidate
+    assert (sel.model.input_history_ is not None) == (best.history is not None)
+
+
+def test_budget_and_bad_input(example_run1):
+    run = tr.read_run(example_run1)
+    sel = select_model(run, "E_z", SENSORS, families=["svr"], cv=3, budget_s=1e-9)
+    assert len(sel.leaderboard) == 1 and len(sel.skipped) == 8
+    with pytest.raises(tr.ParameterError, match="unknown families"):
+        select_model(run, "E_z", SENSORS, families=["forest"])
+    with pytest.raises(tr.ParameterError, match="budget_s"):
+        select_model(run, "E_z", SENSORS, budget_s=0)
+
+
+def test_cli_model_auto(example_run1, example_run2, tmp_path, capsys):
+    from thermerr_rs.cli import main
+
+    out = tmp_path / "auto.json"
+    assert main(["fit", str(example_run1), "--axis", "E_z", "--model", "auto", "--sensors", ",".join(SENSORS),
+                 "--cv", "3", "--test", str(example_run2), "--out", str(out), "--json", "--no-fallbacks"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    board = report["selection"]["leaderboard"]
+    assert len(board) == 19 and report["model"] == board[0]["model"]
+    assert json.loads(out.read_text())["kind"] == board[0]["family"]
