@@ -421,7 +421,10 @@ def test_mlr_does_not_depend_on_row_order(data: Any, rnd: Any) -> None:
     _close(q, p, float(np.max(np.abs(y))))
 
 
-@SLOW
+# the assume()s below drop degenerate problems by design (ties, every alpha at a bound); on some
+# draws that is most of them, which Hypothesis's filter health check reports as an error (seen
+# once in CI: 5 kept, 50 dropped). The examples kept are checked as strictly as before.
+@settings(SLOW, suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
 @given(xy(), st.randoms(use_true_random=False), st.sampled_from(["rbf", "linear"]))
 def test_svr_does_not_depend_on_row_order(data: Any, rnd: Any, kernel: str) -> None:
     x, y = data
