@@ -37,7 +37,7 @@ from .shaping import shape_offsets
 from .stiffness import StiffnessResult, key_thermal_stiffness
 from .svr import SVR
 from .swarm import SwarmResult, TuneResult, cso, pso, svr_cv_mse, tune_svr
-from .thermal import Diagnosis, Machine, Simulation, diagnose
+from .thermal import AxesDiagnosis, Diagnosis, Machine, Simulation, diagnose, diagnose_axes
 
 __all__ = [
     "__version__",
@@ -84,8 +84,10 @@ __all__ = [
     "StiffnessResult",
     "Machine",
     "Simulation",
+    "AxesDiagnosis",
     "Diagnosis",
     "diagnose",
+    "diagnose_axes",
     "ThermerrError",
     "ParameterError",
     "ShapeError",

@@ -170,6 +170,22 @@ class MachineModel:
         ``params``, ``round``, ``rmse_um`` in the order accepted —, ``remainder_um`` and ``rounds``),
         ``calibration``, ``series``, ``calibrated_toml`` and ``extended_toml`` (every named cause)."""
         ...
+    def diagnose_axes(
+        self,
+        source: str,
+        time: _F64,
+        names: list[str],
+        data: _F64,
+        holdout: tuple[str, _F64, list[str], _F64] | None = None,
+        *,
+        axes: list[str],
+        holdout_fraction: float = 0.3,
+        min_score: float = 0.1,
+        noise_ratio: float = 2.0,
+    ) -> list[dict[str, Any]]:
+        """``diagnose`` of every axis in ``axes`` (empty: every drift entry), in parallel; a list
+        of its dicts in ``axes`` order."""
+        ...
 
 # --- support vector regression -------------------------------------------------------------------
 @final

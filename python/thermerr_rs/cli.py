@@ -23,6 +23,7 @@ import json
 import math
 import os
 import sys
+import time
 from collections.abc import Sequence
 from typing import Any
 
@@ -336,7 +337,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    from .thermal import Machine, diagnose
+    from .thermal import Machine, diagnose, diagnose_axes
 
     for given in (args.run, args.machine, args.holdout):
         if given and os.path.realpath(os.path.dirname(os.path.abspath(given))) == os.path.realpath(args.out):
@@ -344,9 +345,25 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     machine = Machine.load(args.machine)
     run = _read(args, args.run)
     hold = _read(args, args.holdout) if args.holdout else None
-    _stage(args, f"diagnosing {args.machine} on {run.source}: calibrating the baseline and every "
+    axes = args.axis or machine.axes
+    if len(axes) > 1:
+        _stage(args, f"diagnosing {args.machine} on {run.source}, {len(axes)} axes ({', '.join(axes)}) in "
+                     "parallel: calibrating each baseline, screening every candidate extension ...")
+        t0 = time.perf_counter()
+        multi = diagnose_axes(run, machine, hold, axes=axes)
+        _stage(args, f"diagnosed {len(axes)} axes in {time.perf_counter() - t0:.1f} s")
+        page = multi.write(args.out)
+        if args.json:
+            _print_json(multi.report)
+        else:
+            print(multi)
+            print(f"report: {page}")
+        return 0
+    _stage(args, f"diagnosing {args.machine} on {run.source}: calibrating the baseline, screening every "
                  "candidate extension ...")
-    d = diagnose(run, machine, hold, axis=args.axis)
+    t0 = time.perf_counter()
+    d = diagnose(run, machine, hold, axis=axes[0] if axes else None)
+    _stage(args, f"diagnosed in {time.perf_counter() - t0:.1f} s")
     page = d.write(args.out)
     if args.json:
         _print_json(d.report)
@@ -525,7 +542,10 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("--machine", required=True, help="nominal machine TOML")
     dg.add_argument("--out", required=True, help="directory for report.json, report.html, calibrated.toml, extended.toml")
     dg.add_argument("--holdout", default=None, help="a separate held-out run (default: the last 30 %% of RUN)")
-    dg.add_argument("--axis", default=None, help="error axis (default: the machine's first)")
+    dg.add_argument("--axis", action="append", default=None,
+                    help="error axis; repeat for several (default: every drift entry of the machine). "
+                         "Several axes write a summary report.json/report.html and <axis>.report.json, "
+                         "<axis>.report.html, <axis>.calibrated.toml, <axis>.extended.toml")
     common(dg)
     dg.set_defaults(func=cmd_diagnose)
 

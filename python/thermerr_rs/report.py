@@ -176,3 +176,46 @@ def write_report(
         "report.html": page,
     })
     return out / "report.html"
+
+
+def render_axes_html(summary: dict[str, Any]) -> str:
+    """The summary page of a diagnosis of several axes: a row per axis, linking its own page."""
+    esc = html.escape
+    rows = []
+    for a in summary["axes"]:
+        causes = ", ".join(
+            c["cause"] + (f" ({c['column']})" if c.get("column") else "") for c in summary["causes"] if c["axis"] == a
+        ) or "—"
+        rows.append(
+            f"<tr><td><a href='{esc(a)}.report.html'>{esc(a)}</a></td><td>{esc(summary['verdicts'][a])}</td>"
+            f"<td>{esc(causes)}</td><td>{summary['baseline_rmse_um'][a]:.3f}</td>"
+            f"<td>{summary['extended_rmse_um'][a]:.3f}</td><td>{summary['gain_pct'][a]:.1f}</td>"
+            f"<td>{summary['remainder_um'][a]:.3f}</td></tr>")
+    return (
+        "<!doctype html><html><head><meta charset='utf-8'><title>thermerr diagnosis</title>"
+        "<style>body{font-family:sans-serif;margin:2em}td,th{padding:.3em .8em;text-align:left}</style>"
+        f"</head><body><h1>Diagnosis of {len(summary['axes'])} axes</h1>"
+        f"<p>run <code>{esc(summary['run'])}</code>, machine <code>{esc(summary['machine'])}</code>; "
+        "every figure on held-out data</p><table><tr><th>axis</th><th>verdict</th><th>causes</th>"
+        "<th>baseline RMS (µm)</th><th>extended RMS (µm)</th><th>gain (%)</th>"
+        "<th>unexplained remainder (µm)</th></tr>" + "".join(rows) + "</table></body></html>\n")
+
+
+def write_axes_report(
+    out_dir: str | os.PathLike[str],
+    summary: dict[str, Any],
+    per_axis: dict[str, tuple[dict[str, Any], dict[str, Any], str, str]],
+) -> Path:
+    """Write the summary and every axis's four files (``<axis>.report.json`` ...) into
+    ``out_dir`` as one set (all or nothing, as :func:`write_report`)."""
+    files: dict[str, str] = {
+        "report.json": json.dumps(summary, indent=1, allow_nan=False),
+        "report.html": render_axes_html(summary),
+    }
+    for a, (report, series, cal, ext) in per_axis.items():
+        files[f"{a}.report.json"] = json.dumps(report, indent=1, allow_nan=False)
+        files[f"{a}.report.html"] = render_html(report, series)
+        files[f"{a}.calibrated.toml"] = cal
+        files[f"{a}.extended.toml"] = ext
+    out = write_set(out_dir, files)
+    return out / "report.html"

@@ -454,3 +454,108 @@ def write_run_csv(path: Any, cols: dict[str, np.ndarray]) -> None:
     for i in range(len(cols["time_s"])):
         rows.append(",".join(f"{cols[n][i]:.6g}" if n != "time_s" else f"{cols[n][i]:.1f}" for n in names))
     write_atomic(path, "\n".join(rows) + "\n")
+
+
+#: The shop run's sixteen temperature columns: which true node (or room / side column) each
+#: sensor reads. ``T_t6`` follows the room; no column is named as the ambient.
+SHOP_SENSORS = {
+    "T_t1": "front_bearing", "T_t2": "spindle_motor", "T_t3": "headstock", "T_t4": "column",
+    "T_t5": "bed", "T_t6": "room", "T_t7": "cabinet", "T_t8": "hydraulic",
+    "T_t9": "front_bearing", "T_t10": "spindle_motor", "T_t11": "headstock", "T_t12": "column",
+    "T_t13": "bed", "T_t14": "headstock", "T_t15": "column", "T_t16": "front_bearing",
+}
+SHOP_CHANNELS = ("E_ch1", "E_ch2", "E_ch3", "E_ch4", "E_ch5")
+
+
+def make_shop_case(
+    seed: int,
+    *,
+    hours: float = 46.0,
+    dt: float = 15.0,
+    hidden: dict[str, str] | None = None,
+    noise_um: float = 0.3,
+) -> Case:
+    """A run shaped like a real measured one: ``hours`` at ``dt`` s (46 h at 15 s = 11 041 rows),
+    sixteen temperatures ``T_t1..T_t16`` (the room is ``T_t6``, not marked; nine are second
+    sensors on the same parts, each behind a small first-order lag of its own), the spindle stepped
+    through 0–5000 rpm every 4 h, the shop air swinging ±1.8 K over a day, and five probe channels
+    ``E_ch1..E_ch5``, each with its own drift map over the true VMC's nodes.
+
+    ``hidden`` maps a channel to an effect of :data:`CAUSES` it carries (``ambient_coupling``,
+    ``speed_growth``, ``thermal_lag`` or ``nonlinear_expansion``; per-channel effects only). The
+    case's ``train`` is the whole run (hold out its end), ``test`` is empty; ``nominal`` is the
+    true machine perturbed by 15–35 %, its sensors named ``T_t1..T_t4``, the ambient ``T_t6``, a
+    drift entry per channel."""
+    rng = np.random.default_rng(seed)
+    hidden = dict(hidden or {})
+    for ch, h in hidden.items():
+        if ch not in SHOP_CHANNELS or h not in ("ambient_coupling", "speed_growth", "thermal_lag", "nonlinear_expansion"):
+            raise ValueError(f"cannot hide {h!r} on {ch!r}")
+    m = machine("vmc")
+    m["sources"] = [dict(s, ref=5000.0) for s in m["sources"]]
+    t = np.arange(0.0, hours * 3600.0 + 1e-9, dt)
+    levels = rng.choice([0.0, 1000.0, 2000.0, 3000.0, 4000.0, 5000.0], size=int(hours // 4) + 2)
+    rpm = levels[(t // (4 * 3600.0)).astype(int)]
+    amb = _ambient(t, rng, 21.0)
+    cols: dict[str, np.ndarray] = {"time_s": t, "U_spindle_rpm": rpm, "T_ambient": amb}
+    for nd in m["nodes"]:
+        if "sensor" in nd:
+            cols[nd["sensor"]] = np.full(len(t), amb[0])
+    sim = simulate_truth(m, cols)
+    side = _side_columns(t, amb, rpm, rng)
+    node_names = [nd["name"] for nd in m["nodes"]]
+    out: dict[str, np.ndarray] = {"time_s": t, "U_spindle_rpm": rpm}
+    first_of: dict[str, str] = {}
+    for col, src in SHOP_SENSORS.items():
+        if src == "room":
+            v = amb.copy()
+        elif src in ("cabinet", "hydraulic"):
+            v = side["T_cabinet" if src == "cabinet" else "T_hydraulic"].copy()
+        elif src not in first_of:
+            first_of[src] = col
+            v = sim[src].copy()
+        else:  # a second sensor on the part: a lag of its own and a slightly smaller rise
+            tau, gain = rng.uniform(300.0, 900.0), rng.uniform(0.8, 1.0)
+            rise = lag(t, sim[src] - sim[src][0], tau)
+            v = sim[src][0] + gain * rise
+        out[col] = v + rng.normal(0, 0.03, len(t))
+    drifts = []
+    params: dict[str, float] = {}
+    for ch in SHOP_CHANNELS:
+        k = {n: float(v * rng.uniform(0.5, 1.5)) for n, v in m["drift"][0]["um_per_k"].items()}
+        e = sum(k[n] * (sim[n] - sim[n][0]) for n in k)
+        h = hidden.get(ch)
+        if h == "ambient_coupling":
+            params[f"{ch}.k_amb"] = kk = float(rng.choice([-1, 1]) * rng.uniform(2.0, 3.5))
+            e = e + kk * (amb - amb[0])
+        elif h == "speed_growth":
+            params[f"{ch}.g"] = g = float(rng.choice([-1, 1]) * rng.uniform(3.0, 5.0))
+            e = e + g * (rpm / 5000.0) ** 2 - g * (rpm[0] / 5000.0) ** 2
+        elif h == "thermal_lag":
+            params[f"{ch}.tau"] = tau = float(rng.uniform(1200, 2400))
+            e = lag(t, e, tau)
+        elif h == "nonlinear_expansion":
+            params[f"{ch}.q"] = q = float(np.sign(k["headstock"]) * rng.uniform(0.012, 0.02))
+            e = e + q * (sim["headstock"] - sim["headstock"][0]) ** 2
+        out[ch] = e + rng.normal(0, noise_um, len(t))
+        drifts.append({"axis": ch, "um_per_k": k})
+    truth = dict(m, drift=drifts)
+    nominal = _perturb(truth, rng)
+    for nd in nominal["nodes"]:
+        if "sensor" in nd:
+            nd["sensor"] = first_of[nd["name"]]
+    nominal["ambient"] = "T_t6"
+    nominal["name"] = "shop-nominal"
+    assert set(node_names) >= set(first_of)
+    return Case("shop", "+".join(f"{c}:{h}" for c, h in hidden.items()) or "none", seed, None, params,
+                out, {}, truth, nominal, axis=SHOP_CHANNELS[0])
+
+
+def lag(t: np.ndarray, y: np.ndarray, tau: float) -> np.ndarray:
+    """First-order lag of ``y`` with time constant ``tau`` (exact for a held input), from y[0]."""
+    z = np.empty_like(y)
+    z[0] = y[0]
+    for i in range(1, len(y)):
+        a = np.exp(-(t[i] - t[i - 1]) / tau)
+        z[i] = a * z[i - 1] + (1 - a) * y[i - 1]
+    return z

@@ -119,6 +119,10 @@ class Diagnosis:
     extra: dict[str, Any] = field(default_factory=dict)
 
     @property
+    def axis(self) -> str:
+        return str(self.report["axis"])
+
+    @property
     def verdict(self) -> str:
         return str(self.report["verdict"])
 
@@ -182,6 +186,74 @@ def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: st
     d = machine._inner.diagnose(*_run_args(run), _run_args(holdout) if holdout is not None else None,
                                 axis=axis, holdout_fraction=holdout_fraction, min_score=min_score,
                                 noise_ratio=noise_ratio)
+    return _diagnosis(d)
+
+
+def _diagnosis(d: dict[str, Any]) -> Diagnosis:
     cal = Machine(_core.MachineModel.from_toml(d["calibrated_toml"], "calibrated.toml"))
     ext = Machine(_core.MachineModel.from_toml(d["extended_toml"], "extended.toml"))
     return Diagnosis(json.loads(d["report"]), d["series"], cal, ext, {"calibration": d["calibration"]})
+
+
+@dataclass
+class AxesDiagnosis:
+    """The outcome of :func:`diagnose_axes`: one :class:`Diagnosis` per error axis (``by_axis``,
+    in the order diagnosed; ``d["E_y"]`` is one of them). ``report`` is the summary written as
+    report.json: every axis's verdict, causes (each with its ``axis``), gain and remainder."""
+
+    by_axis: dict[str, Diagnosis]
+    run: str
+    machine: str
+
+    def __getitem__(self, axis: str) -> Diagnosis:
+        return self.by_axis[axis]
+
+    @property
+    def axes(self) -> list[str]:
+        return list(self.by_axis)
+
+    @property
+    def causes(self) -> list[dict[str, Any]]:
+        """Every named cause of every axis, axis by axis, each in its axis's order of acceptance."""
+        return [c for d in self.by_axis.values() for c in d.causes]
+
+    @property
+    def report(self) -> dict[str, Any]:
+        return {
+            "axes": self.axes,
+            "run": self.run,
+            "machine": self.machine,
+            "verdicts": {a: d.verdict for a, d in self.by_axis.items()},
+            "causes": self.causes,
+            "gain_pct": {a: d.gain_pct for a, d in self.by_axis.items()},
+            "remainder_um": {a: d.remainder_um for a, d in self.by_axis.items()},
+            "baseline_rmse_um": {a: d.report["baseline"]["rmse_um"] for a, d in self.by_axis.items()},
+            "extended_rmse_um": {a: d.report["extended"]["rmse_um"] for a, d in self.by_axis.items()},
+            "reports": {a: f"{a}.report.json" for a in self.by_axis},
+        }
+
+    def write(self, out_dir: str | os.PathLike[str]) -> Path:
+        """Write the summary (report.json, report.html) and, per axis, ``<axis>.report.json``,
+        ``<axis>.report.html``, ``<axis>.calibrated.toml`` and ``<axis>.extended.toml`` into
+        ``out_dir``, as one set (all or nothing)."""
+        from .report import write_axes_report
+
+        return write_axes_report(out_dir, self.report, {
+            a: (d.report, d.series, d.calibrated.to_toml(), d.extended.to_toml()) for a, d in self.by_axis.items()
+        })
+
+    def __str__(self) -> str:
+        return "\n\n".join(f"== {a} ==\n{d}" for a, d in self.by_axis.items())
+
+
+def diagnose_axes(run: Run, machine: Machine, holdout: Run | None = None, *, axes: list[str] | None = None,
+                  holdout_fraction: float = 0.3, min_score: float = 0.1,
+                  noise_ratio: float = 2.0) -> AxesDiagnosis:
+    """:func:`diagnose` for several error axes at once (default: every drift entry of the
+    machine), in parallel. Each axis is diagnosed on the shared temperatures and its own error
+    column, with its own calibration of the network and its own causes and remainder."""
+    ds = machine._inner.diagnose_axes(*_run_args(run), _run_args(holdout) if holdout is not None else None,
+                                      axes=list(axes or []), holdout_fraction=holdout_fraction,
+                                      min_score=min_score, noise_ratio=noise_ratio)
+    out = {d.axis: d for d in map(_diagnosis, ds)}
+    return AxesDiagnosis(out, run.source, machine._inner.file)

@@ -7,7 +7,9 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use thermerr_core::run::Run;
 use thermerr_core::thermal::calibrate::{calibrate, CalibrationOptions};
-use thermerr_core::thermal::diagnose::{diagnose, Cause, DiagnoseOptions, Verdict};
+use thermerr_core::thermal::diagnose::{
+    diagnose, diagnose_axes, Cause, DiagnoseOptions, Diagnosis, Verdict,
+};
 use thermerr_core::thermal::{simulate, Init, Machine, RunView};
 
 use crate::{slice1, vec_to_py, PyErrWrap};
@@ -249,43 +251,101 @@ impl PyMachine {
             }
             diagnose(&self.inner, &view, hview.as_ref(), &opts)
         })?;
-        let out = PyDict::new(py);
-        let report = serde_json::to_string(&diag.report(&self.file))
-            .map_err(|e| PyErrWrap(thermerr_core::Error::Format(e.to_string())))?;
-        out.set_item("report", report)?;
-        let cal = PyDict::new(py);
-        cal.set_item("bic", diag.baseline.bic())?;
-        cal.set_item("sigma_t", diag.baseline.sigma_t)?;
-        cal.set_item("sigma_e", diag.baseline.sigma_e)?;
-        cal.set_item("n_iter", diag.baseline.n_iter)?;
-        cal.set_item("converged", diag.baseline.converged)?;
-        out.set_item("calibration", cal)?;
-        out.set_item(
-            "calibrated_toml",
-            diag.baseline.machine.to_toml().map_err(PyErrWrap)?,
-        )?;
-        out.set_item(
-            "extended_toml",
-            diag.extended().to_toml().map_err(PyErrWrap)?,
-        )?;
-        let (base, ext) = (&diag.baseline_holdout, diag.extended_holdout());
-        let series = PyDict::new(py);
-        series.set_item("time_s", vec_to_py(py, diag.holdout_time.clone()))?;
-        series.set_item("measured", vec_to_py(py, diag.holdout_measured.clone()))?;
-        series.set_item("baseline", vec_to_py(py, base.predicted.clone()))?;
-        series.set_item("extended", vec_to_py(py, ext.predicted.clone()))?;
-        if let (Verdict::Cause(Cause::SensorDrift), Some(col)) = (diag.verdict, &diag.column) {
-            if let (Some(b), Some(e)) = (base.sensor_residual(col), ext.sensor_residual(col)) {
-                let s = PyDict::new(py);
-                s.set_item("column", col)?;
-                s.set_item("baseline_residual", vec_to_py(py, b.to_vec()))?;
-                s.set_item("extended_residual", vec_to_py(py, e.to_vec()))?;
-                series.set_item("sensor", s)?;
-            }
-        }
-        out.set_item("series", series)?;
-        Ok(out)
+        diagnosis_dict(py, &diag, &self.file)
     }
+
+    /// The diagnosis of every axis in `axes`, one per axis in parallel, each on the shared
+    /// temperatures and its own error column; a list of `diagnose`'s dicts in `axes` order.
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axes, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0))]
+    #[allow(clippy::too_many_arguments, clippy::type_complexity)]
+    fn diagnose_axes<'py>(
+        &self,
+        py: Python<'py>,
+        source: &str,
+        time: PyReadonlyArray1<'py, f64>,
+        names: Vec<String>,
+        data: PyReadonlyArray2<'py, f64>,
+        holdout: Option<(
+            String,
+            PyReadonlyArray1<'py, f64>,
+            Vec<String>,
+            PyReadonlyArray2<'py, f64>,
+        )>,
+        axes: Vec<String>,
+        holdout_fraction: f64,
+        min_score: f64,
+        noise_ratio: f64,
+    ) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let run = core_run(source, &time, names, &data)?;
+        let hold = holdout
+            .as_ref()
+            .map(|(s, t, n, d)| core_run(s, t, n.clone(), d))
+            .transpose()?;
+        let opts = DiagnoseOptions {
+            holdout_fraction,
+            min_score,
+            noise_ratio,
+            ..DiagnoseOptions::default()
+        };
+        let diags = crate::detach(py, || {
+            let view = RunView::new(&run);
+            self.inner
+                .check_columns(&self.file, &run.source, |c| view.has(c))?;
+            let hview = hold.as_ref().map(RunView::new);
+            if let Some(h) = &hview {
+                self.inner
+                    .check_columns(&self.file, &h.source, |c| h.has(c))?;
+            }
+            diagnose_axes(&self.inner, &view, hview.as_ref(), &axes, &opts)
+        })?;
+        diags
+            .iter()
+            .map(|d| diagnosis_dict(py, d, &self.file))
+            .collect()
+    }
+}
+
+fn diagnosis_dict<'py>(
+    py: Python<'py>,
+    diag: &Diagnosis,
+    file: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let out = PyDict::new(py);
+    let report = serde_json::to_string(&diag.report(file))
+        .map_err(|e| PyErrWrap(thermerr_core::Error::Format(e.to_string())))?;
+    out.set_item("report", report)?;
+    let cal = PyDict::new(py);
+    cal.set_item("bic", diag.baseline.bic())?;
+    cal.set_item("sigma_t", diag.baseline.sigma_t)?;
+    cal.set_item("sigma_e", diag.baseline.sigma_e)?;
+    cal.set_item("n_iter", diag.baseline.n_iter)?;
+    cal.set_item("converged", diag.baseline.converged)?;
+    out.set_item("calibration", cal)?;
+    out.set_item(
+        "calibrated_toml",
+        diag.baseline.machine.to_toml().map_err(PyErrWrap)?,
+    )?;
+    out.set_item(
+        "extended_toml",
+        diag.extended().to_toml().map_err(PyErrWrap)?,
+    )?;
+    let (base, ext) = (&diag.baseline_holdout, diag.extended_holdout());
+    let series = PyDict::new(py);
+    series.set_item("time_s", vec_to_py(py, diag.holdout_time.clone()))?;
+    series.set_item("measured", vec_to_py(py, diag.holdout_measured.clone()))?;
+    series.set_item("baseline", vec_to_py(py, base.predicted.clone()))?;
+    series.set_item("extended", vec_to_py(py, ext.predicted.clone()))?;
+    if let (Verdict::Cause(Cause::SensorDrift), Some(col)) = (diag.verdict, &diag.column) {
+        if let (Some(b), Some(e)) = (base.sensor_residual(col), ext.sensor_residual(col)) {
+            let s = PyDict::new(py);
+            s.set_item("column", col)?;
+            s.set_item("baseline_residual", vec_to_py(py, b.to_vec()))?;
+            s.set_item("extended_residual", vec_to_py(py, e.to_vec()))?;
+            series.set_item("sensor", s)?;
+        }
+    }
+    out.set_item("series", series)?;
+    Ok(out)
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

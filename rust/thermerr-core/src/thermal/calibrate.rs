@@ -11,7 +11,9 @@
 use faer::Mat;
 
 use super::machine::{Machine, NodeSpec};
-use super::sim::{drift_terms, finish, lag, simulate_nodes, Init, RunView, Simulation};
+use super::sim::{
+    drift_terms, finish, lag, median_step, simulate_nodes, Init, RunView, Simulation, Thinned,
+};
 use crate::error::{Error, Result};
 use crate::linalg::lstsq;
 use crate::optim::{least_squares, LmOptions};
@@ -402,7 +404,21 @@ pub fn evaluate(
     Ok((fitted, sim, r))
 }
 
-/// Calibrates `m` on `run` with the given free parameters (`None`: [`default_params`]).
+/// Runs sampled faster than this are calibrated on every k-th sample, k = ⌊`FIT_STEP_S` / median
+/// step⌋: a lumped network's time constants are minutes to hours, so a minute resolves them, and
+/// each calibration costs k times less. Simulations and held-out figures keep every sample.
+pub const FIT_STEP_S: f64 = 60.0;
+/// Thinning never leaves fewer fitted rows than this.
+pub const MIN_THINNED_ROWS: usize = 200;
+
+/// The thinning factor `calibrate` applies to a run with time axis `time`, `rows` of it fitted.
+pub fn fit_thinning(time: &[f64], rows: usize) -> usize {
+    let k = median_step(time).map_or(1, |h| (FIT_STEP_S / h).floor().clamp(1.0, 1e6) as usize);
+    k.min(rows / MIN_THINNED_ROWS).max(1)
+}
+
+/// Calibrates `m` on `run` with the given free parameters (`None`: [`default_params`]), on every
+/// [`fit_thinning`]-th row of a run sampled faster than [`FIT_STEP_S`].
 pub fn calibrate(
     m: &Machine,
     run: &RunView<'_>,
@@ -410,6 +426,25 @@ pub fn calibrate(
     free: Option<Vec<FreeParam>>,
 ) -> Result<Calibration> {
     opts.check()?;
+    let rows = opts.fit_rows.unwrap_or(run.len()).min(run.len());
+    let k = fit_thinning(run.time, rows);
+    if k <= 1 {
+        return calibrate_all_rows(m, run, opts, free);
+    }
+    let thin = Thinned::of(run, k);
+    let opts = CalibrationOptions {
+        fit_rows: Some(rows.div_ceil(k)),
+        ..opts.clone()
+    };
+    calibrate_all_rows(m, &thin.view(), &opts, free)
+}
+
+fn calibrate_all_rows(
+    m: &Machine,
+    run: &RunView<'_>,
+    opts: &CalibrationOptions,
+    free: Option<Vec<FreeParam>>,
+) -> Result<Calibration> {
     let tg = targets(m, run, &opts.axis)?;
     let rows = opts.fit_rows.unwrap_or(run.len()).min(run.len());
     if rows < 10 {

@@ -205,6 +205,56 @@ fn ambient_series<'a>(mach: &Machine, run: &RunView<'a>) -> Result<std::borrow::
     })
 }
 
+/// Every `k`-th row of a run, owned (see [`crate::thermal::calibrate::FIT_STEP_S`]).
+pub struct Thinned {
+    source: String,
+    time: Vec<f64>,
+    cols: Vec<(String, Vec<f64>)>,
+}
+
+impl Thinned {
+    pub fn of(run: &RunView<'_>, k: usize) -> Thinned {
+        let k = k.max(1);
+        let every = |c: &[f64]| c.iter().step_by(k).copied().collect::<Vec<f64>>();
+        Thinned {
+            source: run.source.clone(),
+            time: every(run.time),
+            cols: run
+                .cols
+                .iter()
+                .map(|(n, c)| (n.to_string(), every(c)))
+                .collect(),
+        }
+    }
+
+    pub fn view(&self) -> RunView<'_> {
+        RunView {
+            source: self.source.clone(),
+            time: &self.time,
+            cols: self
+                .cols
+                .iter()
+                .map(|(n, c)| (n.as_str(), c.as_slice()))
+                .collect(),
+        }
+    }
+}
+
+/// The median step of a time axis (s); `None` with fewer than two samples or no positive step.
+pub fn median_step(t: &[f64]) -> Option<f64> {
+    let mut d: Vec<f64> = t
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|v| v.is_finite())
+        .collect();
+    if d.is_empty() {
+        return None;
+    }
+    let mid = d.len() / 2;
+    let (_, m, _) = d.select_nth_unstable_by(mid, f64::total_cmp);
+    (*m > 0.0).then_some(*m)
+}
+
 /// Distinct step lengths whose transition matrices are kept at once.
 const MAX_STEP_LENGTHS: usize = 1024;
 /// Widest range of step lengths (in grid steps) whose matrices are built by products.
@@ -336,6 +386,13 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
     }
     let mut f = vec![0.0; nd];
     let mut xn = vec![0.0; nd];
+    // the step's transition matrices as flat row-major arrays, looked up again only when the
+    // step length changes (a logger with a fixed period has one for the whole run)
+    let mut cur_steps: Option<i64> = None;
+    let mut phi = vec![0.0; nd * nd];
+    let mut gam = vec![0.0; nd * nd];
+    // a source's power for the last input value (stepped inputs repeat it for hours)
+    let mut last_power: Vec<(f64, f64)> = vec![(f64::NAN, 0.0); srcs.len()];
     for k in 0..n_t {
         let row = &mut out[k * nn..(k + 1) * nn];
         for (p, &i) in net.dyn_nodes.iter().enumerate() {
@@ -359,29 +416,42 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         for &(p, b, g) in &net.bnd_links {
             f[p] += g * bnd[b].map_or(0.0, |c| c[k]);
         }
-        for &(p, u, w, r, e) in &srcs {
+        for (&(p, u, w, r, e), last) in srcs.iter().zip(last_power.iter_mut()) {
             let uk = u[k];
             if uk > 0.0 {
-                f[p] += w * (uk / r).powf(e);
+                if uk.to_bits() != last.0.to_bits() {
+                    *last = (uk, w * (uk / r).powf(e));
+                }
+                f[p] += last.1;
             }
         }
         for (fp, c) in f.iter_mut().zip(&net.cap) {
             *fp /= c;
         }
-        if !cache.contains_key(&steps) {
-            let e = expm(&augmented(steps as f64 * ticks.q));
-            if cache.len() >= MAX_STEP_LENGTHS {
-                cache.clear();
+        if cur_steps != Some(steps) {
+            if !cache.contains_key(&steps) {
+                let e = expm(&augmented(steps as f64 * ticks.q));
+                if cache.len() >= MAX_STEP_LENGTHS {
+                    cache.clear();
+                }
+                cache.insert(steps, split(&e));
             }
-            cache.insert(steps, split(&e));
+            let (p_m, g_m) = &cache[&steps];
+            for p in 0..nd {
+                for q in 0..nd {
+                    phi[p * nd + q] = p_m[(p, q)];
+                    gam[p * nd + q] = g_m[(p, q)];
+                }
+            }
+            cur_steps = Some(steps);
         }
-        let (phi, gam) = &cache[&steps];
-        for p in 0..nd {
+        for (p, xp) in xn.iter_mut().enumerate() {
+            let (pr, gr) = (&phi[p * nd..(p + 1) * nd], &gam[p * nd..(p + 1) * nd]);
             let mut acc = 0.0;
             for q in 0..nd {
-                acc += phi[(p, q)] * x[q] + gam[(p, q)] * f[q];
+                acc += pr[q] * x[q] + gr[q] * f[q];
             }
-            xn[p] = acc;
+            *xp = acc;
         }
         std::mem::swap(&mut x, &mut xn);
     }

@@ -2,10 +2,10 @@
 
 use super::cause::Cause;
 use super::score::{self, HeldOut};
-use super::{Candidate, Holdout};
+use super::{Candidate, Fit, Holdout};
 use crate::error::Result;
 use crate::thermal::calibrate::{
-    calibrate, default_params, Calibration, CalibrationOptions, FreeParam, Param,
+    apply, calibrate, default_params, Calibration, CalibrationOptions, FreeParam, Param,
 };
 use crate::thermal::machine::{Ambient, InputTerm, LinkSpec, Machine, NodeSpec};
 use crate::thermal::sim::RunView;
@@ -257,7 +257,8 @@ fn warm_start(mut free: Vec<FreeParam>, base: &Calibration) -> Vec<FreeParam> {
     free
 }
 
-/// Calibrates one extension on `train` and scores it on the held-out data.
+/// Calibrates one extension on `train` (the whole network refitted with it, from the current
+/// model's values) and scores it on the held-out data.
 pub(super) fn fit(
     spec: Spec,
     base: &Baseline<'_>,
@@ -283,6 +284,48 @@ pub(super) fn fit(
             cal = cold;
         }
     }
+    scored(spec, cal, base, held, Fit::Full)
+}
+
+/// The screening fit of one extension: the thermal network held at the current model's
+/// calibrated values, only the extension's parameters, the initial offsets and the linear drift
+/// terms searched. A handful of parameters instead of every capacity and conductance, so each
+/// candidate costs a fraction of a full calibration; the best ones are then [`fit`] in full.
+pub(super) fn screen(
+    spec: Spec,
+    base: &Baseline<'_>,
+    train: &RunView<'_>,
+    held: &HeldOut<'_, '_>,
+) -> Result<Candidate> {
+    let thermal = warm_start(
+        default_params(&spec.machine, &base.options),
+        base.calibration,
+    );
+    let x: Vec<f64> = thermal.iter().map(|f| f.start.clamp(f.lo, f.hi)).collect();
+    let (held_machine, _) = apply(&spec.machine, &thermal, &x);
+    let opts = CalibrationOptions {
+        thermal: false,
+        ..base.options.clone()
+    };
+    let mut free = warm_start(default_params(&held_machine, &opts), base.calibration);
+    free.extend(spec.extra.iter().cloned());
+    let mut cal = calibrate(&held_machine, train, &opts, Some(free))?;
+    // the network's parameters count as fitted (they were, for the current model), so that the
+    // BIC compares like with like
+    cal.n_params += thermal
+        .iter()
+        .filter(|f| !matches!(f.param, Param::InitOffset(_)))
+        .count();
+    scored(spec, cal, base, held, Fit::Screen)
+}
+
+fn scored(
+    spec: Spec,
+    cal: Calibration,
+    base: &Baseline<'_>,
+    held: &HeldOut<'_, '_>,
+    fit: Fit,
+) -> Result<Candidate> {
     let h = score::holdout(&cal, held)?;
     let sensor_gain_pct = match (spec.cause, &spec.column) {
         (Cause::SensorDrift, Some(col)) => score::sensor_gain_pct(base.holdout, &h, col),
@@ -297,6 +340,7 @@ pub(super) fn fit(
         gain_pct: score::gain_pct(base.holdout, &h),
         score: score::joint_score(base.holdout, &h),
         sensor_gain_pct,
+        fit,
         holdout: h,
         calibration: cal,
         spec: Some(spec),

@@ -26,6 +26,11 @@ pub const MAX_SOURCE_COLUMNS: usize = 4;
 pub const MAX_CANDIDATES: usize = 48;
 /// Held-out rows below which no verdict is given.
 pub const MIN_HOLDOUT_ROWS: usize = 10;
+/// Candidates of a round calibrated in full (the whole network refitted with the extension):
+/// the best by their screening fit (the network held at the current model's values), this many by
+/// training ΔBIC, then this many more by held-out score. The rest keep their screening figures.
+pub const FULL_FITS_BY_BIC: usize = 4;
+pub const FULL_FITS_BY_SCORE: usize = 2;
 
 use rayon::prelude::*;
 use serde::{Serialize, Serializer};
@@ -114,12 +119,24 @@ pub struct Candidate {
     #[serde(rename = "rmse_um", serialize_with = "rmse_only")]
     pub holdout: Holdout,
     pub parameters: BTreeMap<String, f64>,
+    /// How it was fitted: `screen` (network held) or `full` (network refitted with it).
+    pub fit: Fit,
     #[serde(skip)]
     pub calibration: Calibration,
     /// The extended machine before fitting and its extra parameters (those of the causes
     /// accepted in earlier rounds, then its own).
     #[serde(skip)]
     pub spec: Option<candidates::Spec>,
+}
+
+/// How a candidate was calibrated (report field `fit`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Fit {
+    /// The thermal network held at the current model's values.
+    Screen,
+    /// The whole network refitted with the extension.
+    Full,
 }
 
 fn rmse_only<S: Serializer>(h: &Holdout, s: S) -> std::result::Result<S::Ok, S::Error> {
@@ -298,9 +315,28 @@ fn round_candidates(
         .into_par_iter()
         .map(|spec| {
             crate::interrupt::check()?;
+            candidates::screen(spec, base, train, cx.held)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    // the full fits: the best by training evidence (a drifting sensor biases the held network,
+    // so its screened held-out score can be poor while its ΔBIC is not), then the best by
+    // held-out score
+    cands.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
+    let mut rest = cands.split_off(FULL_FITS_BY_BIC.min(cands.len()));
+    rest.sort_by(|a, b| b.score.total_cmp(&a.score));
+    let more = rest.drain(..FULL_FITS_BY_SCORE.min(rest.len()));
+    cands.extend(more);
+    let mut cands = cands
+        .into_par_iter()
+        .map(|c| {
+            crate::interrupt::check()?;
+            let spec = c
+                .spec
+                .ok_or_else(|| Error::Numerical("a screened candidate lost its spec".into()))?;
             candidates::fit(spec, base, train, cx.held)
         })
         .collect::<Result<Vec<_>>>()?;
+    cands.extend(rest);
     cands.sort_by(|a, b| b.score.total_cmp(&a.score));
     Ok((cands, untried_columns))
 }
@@ -461,6 +497,43 @@ pub fn diagnose(
     })
 }
 
+/// The diagnosis of each of `axes` (every drift entry of the machine when empty), in parallel,
+/// in `axes` order. Each axis is diagnosed on the shared temperatures and its own error column:
+/// its network is calibrated on the temperatures and that axis, and its causes are its own.
+pub fn diagnose_axes(
+    m: &Machine,
+    train: &RunView<'_>,
+    hold: Option<&RunView<'_>>,
+    axes: &[String],
+    opts: &DiagnoseOptions,
+) -> Result<Vec<Diagnosis>> {
+    let axes: Vec<String> = if axes.is_empty() {
+        m.drift.iter().map(|d| d.axis.clone()).collect()
+    } else {
+        axes.to_vec()
+    };
+    for (k, a) in axes.iter().enumerate() {
+        if axes[..k].contains(a) {
+            return Err(Error::param("axes", format!("`{a}` is given twice")));
+        }
+        if !m.drift.iter().any(|d| &d.axis == a) {
+            return Err(Error::param(
+                "axes",
+                format!("the machine has no drift entry for `{a}`"),
+            ));
+        }
+    }
+    axes.par_iter()
+        .map(|a| {
+            let o = DiagnoseOptions {
+                axis: Some(a.clone()),
+                ..opts.clone()
+            };
+            diagnose(m, train, hold, &o)
+        })
+        .collect()
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -497,6 +570,7 @@ pub(crate) mod tests {
             sensor_gain_pct: None,
             holdout,
             parameters: BTreeMap::new(),
+            fit: Fit::Full,
             calibration: Calibration {
                 machine,
                 init: Vec::new(),
@@ -524,7 +598,7 @@ pub(crate) mod tests {
         );
         assert!(
             v.ends_with(
-                r#""delta_bic":-20.0,"sensor_gain_pct":null,"rmse_um":1.0,"parameters":{}}"#
+                r#""delta_bic":-20.0,"sensor_gain_pct":null,"rmse_um":1.0,"parameters":{},"fit":"full"}"#
             ),
             "{v}"
         );

@@ -1,0 +1,118 @@
+"""Several error axes in one diagnosis, on a run shaped like a real measured one (issue 15 points 3
+and 4): 46 h at 15 s (11 041 rows), sixteen temperatures with no column named as the room, the
+spindle stepped every 4 h, the shop air swinging over the day, five probe channels with their own
+drift maps. One channel hides an ambient coupling, one a speed growth, one nothing: each axis must
+get its own verdict, and the written output must hold the summary and every axis's report.
+
+Also: calibration thins a run sampled faster than once a minute (every k-th sample, k = ⌊60 s /
+step⌋), so calibrating a 15-s run is exactly calibrating its every-4th-row subsample."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import thermerr_rs as tr
+from thermerr_rs import synthetic as syn
+from thermerr_rs.cli import main
+from thermerr_rs.errors import ThermerrError
+from thermerr_rs.thermal import Machine, diagnose_axes
+
+HIDDEN = {"E_ch1": "speed_growth", "E_ch3": "ambient_coupling"}
+AXES = ["E_ch1", "E_ch2", "E_ch3"]
+
+
+@pytest.fixture(scope="module")
+def shop():
+    c = syn.make_shop_case(1, hidden=HIDDEN)
+    return c, tr.Run.from_frame(c.train, source="shop.csv"), Machine.from_toml(c.nominal_toml(), "shop.toml")
+
+
+@pytest.fixture(scope="module")
+def diagnosed(shop):
+    _, run, m = shop
+    return diagnose_axes(run, m, axes=AXES)
+
+
+def test_the_shop_run_is_shaped_like_a_real_one(shop):
+    c, run, m = shop
+    assert len(run) == 11041 and np.all(np.diff(run.time_s) == 15.0)
+    temps = [n for n in run.names if n.startswith("T_")]
+    assert len(temps) == 16 and "T_ambient" not in run.names
+    assert [n for n in run.names if n.startswith("E_")] == list(syn.SHOP_CHANNELS)
+    assert m.axes == list(syn.SHOP_CHANNELS)
+    amb = run["T_t6"]
+    assert 2.0 < amb.max() - amb.min() < 6.0  # the shop air's swing over two days
+
+
+def test_each_axis_gets_its_own_verdict(diagnosed):
+    assert diagnosed.axes == AXES
+    got = {a: diagnosed[a].verdict for a in AXES}
+    assert got == {"E_ch1": "speed_growth", "E_ch2": "none", "E_ch3": "ambient_coupling"}, {
+        a: diagnosed[a].evidence for a in AXES}
+    for a in ("E_ch1", "E_ch3"):
+        d = diagnosed[a]
+        assert d.report["axis"] == a
+        assert d.gain_pct > 50.0, d.evidence
+        assert [c["axis"] for c in d.causes] == [a] * len(d.causes)
+    assert diagnosed["E_ch2"].causes == [] and diagnosed["E_ch2"].remainder_um == 0.0
+
+
+def test_each_axis_equals_its_own_diagnosis(shop, diagnosed):
+    """The parallel run of several axes is the single-axis diagnosis of each, figure for figure."""
+    from thermerr_rs.thermal import diagnose
+
+    _, run, m = shop
+    alone = diagnose(run, m, axis="E_ch2")
+    assert alone.report == diagnosed["E_ch2"].report
+
+
+def test_the_summary_and_every_axis_are_written(diagnosed, tmp_path):
+    out = diagnosed.write(tmp_path / "diag")
+    assert out.name == "report.html"
+    names = sorted(p.name for p in (tmp_path / "diag").iterdir())
+    assert names == sorted(["report.json", "report.html"] + [
+        f"{a}.{f}" for a in AXES for f in ("report.json", "report.html", "calibrated.toml", "extended.toml")])
+    summary = json.loads((tmp_path / "diag" / "report.json").read_text())
+    assert summary["axes"] == AXES
+    assert summary["verdicts"] == {a: diagnosed[a].verdict for a in AXES}
+    assert {c["axis"] for c in summary["causes"]} == {"E_ch1", "E_ch3"}
+    assert set(summary["remainder_um"]) == set(AXES)
+    per = json.loads((tmp_path / "diag" / "E_ch3.report.json").read_text())
+    assert per == diagnosed["E_ch3"].report
+    Machine.load(tmp_path / "diag" / "E_ch3.extended.toml")
+
+
+def test_cli_diagnoses_the_axes_given(shop, tmp_path, capsys):
+    c, _, _ = shop
+    run_csv, toml = tmp_path / "shop.csv", tmp_path / "shop.toml"
+    syn.write_run_csv(run_csv, {k: v for k, v in c.train.items()})
+    toml.write_text(c.nominal_toml())
+    out = tmp_path / "out"
+    assert main(["diagnose", str(run_csv), "--machine", str(toml), "--out", str(out),
+                 "--axis", "E_ch2", "--axis", "E_ch3"]) == 0
+    text = capsys.readouterr().out
+    assert "== E_ch2 ==" in text and "== E_ch3 ==" in text
+    assert json.loads((out / "report.json").read_text())["verdicts"]["E_ch3"] == "ambient_coupling"
+
+
+def test_an_axis_the_machine_lacks_is_one_clear_error(shop, tmp_path, capsys):
+    _, run, m = shop
+    with pytest.raises(ThermerrError, match="no drift entry for `E_ch9`"):
+        diagnose_axes(run, m, axes=["E_ch1", "E_ch9"])
+    with pytest.raises(ThermerrError, match="`E_ch1` is given twice"):
+        diagnose_axes(run, m, axes=["E_ch1", "E_ch1"])
+
+
+def test_a_fast_run_is_calibrated_on_every_kth_sample(shop):
+    """15-s samples: k = 4. Calibrating the run and calibrating its every-4th-row subsample (which
+    is sampled at 60 s and so not thinned again) give the same machine, parameter for parameter."""
+    c, run, m = shop
+    short = {k: v[:2400] for k, v in c.train.items()}
+    sub = {k: v[::4] for k, v in short.items()}
+    a, info_a = m.calibrate(tr.Run.from_frame(short), "E_ch1", max_iter=15)
+    b, info_b = m.calibrate(tr.Run.from_frame(sub), "E_ch1", max_iter=15)
+    assert a.to_toml() == b.to_toml()
+    assert info_a["n_data"] == info_b["n_data"] == 600 * 5  # 4 sensors and the axis, 600 rows
