@@ -336,6 +336,11 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _stage_times(report: dict[str, Any]) -> str:
+    st = report.get("stage_s", {})
+    return ", ".join(f"{k.replace('_', ' ')} {v:.1f} s" for k, v in st.items())
+
+
 def cmd_diagnose(args: argparse.Namespace) -> int:
     from .thermal import Machine, diagnose, diagnose_axes
 
@@ -352,6 +357,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         multi = diagnose_axes(run, machine, hold, axes=axes)
         _stage(args, f"diagnosed {len(axes)} axes in {time.perf_counter() - t0:.1f} s")
+        for a in multi.axes:
+            _stage(args, f"  {a}: " + _stage_times(multi[a].report))
         page = multi.write(args.out)
         if args.json:
             _print_json(multi.report)
@@ -363,7 +370,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
                  "candidate extension ...")
     t0 = time.perf_counter()
     d = diagnose(run, machine, hold, axis=axes[0] if axes else None)
-    _stage(args, f"diagnosed in {time.perf_counter() - t0:.1f} s")
+    _stage(args, f"diagnosed in {time.perf_counter() - t0:.1f} s: " + _stage_times(d.report))
     page = d.write(args.out)
     if args.json:
         _print_json(d.report)

@@ -18,6 +18,10 @@ pub struct LmOptions {
     pub max_iter: usize,
     /// Stop when the relative decrease of the cost over an accepted step is below this.
     pub ftol: f64,
+    /// Stop when the absolute decrease of the cost (½·Σr²) over an accepted step is below this
+    /// (0: never). For residuals normalised by their noise, a decrease far below one is
+    /// statistically nothing.
+    pub atol: f64,
     /// Stop when the step in θ is below this (max-norm).
     pub xtol: f64,
     /// Stop when the max-norm of the gradient in θ is below this.
@@ -33,6 +37,7 @@ impl Default for LmOptions {
         LmOptions {
             max_iter: 100,
             ftol: 1e-10,
+            atol: 0.0,
             xtol: 1e-10,
             gtol: 1e-12,
             lambda0: 1e-3,
@@ -198,6 +203,7 @@ where
             if ct < cost {
                 let step = (0..n).map(|j| delta[(j, 0)].abs()).fold(0.0, f64::max);
                 let rel = (cost - ct) / cost.max(f64::MIN_POSITIVE);
+                let cost_before = cost;
                 theta = trial;
                 r = rt;
                 cost = ct;
@@ -205,6 +211,9 @@ where
                 accepted = true;
                 if rel < opts.ftol {
                     message = "cost decrease below ftol".into();
+                    converged = true;
+                } else if cost_before - ct < opts.atol {
+                    message = "cost decrease below atol".into();
                     converged = true;
                 } else if step < opts.xtol {
                     message = "step below xtol".into();

@@ -408,6 +408,9 @@ pub fn evaluate(
 /// step⌋: a lumped network's time constants are minutes to hours, so a minute resolves them, and
 /// each calibration costs k times less. Simulations and held-out figures keep every sample.
 pub const FIT_STEP_S: f64 = 60.0;
+/// A calibration stops when a step lowers the cost ½·Σr² of the noise-normalised residuals by
+/// less than this: a thousandth of the smallest BIC difference the diagnosis acts on (10).
+pub const CALIBRATION_ATOL: f64 = 0.01;
 /// Thinning never leaves fewer fitted rows than this.
 pub const MIN_THINNED_ROWS: usize = 200;
 
@@ -497,6 +500,7 @@ fn calibrate_all_rows(
         let lm = LmOptions {
             max_iter: opts.max_iter,
             ftol: 1e-9,
+            atol: CALIBRATION_ATOL,
             ..LmOptions::default()
         };
         let res = least_squares(residual, &x0, &lo, &hi, &lm)?;

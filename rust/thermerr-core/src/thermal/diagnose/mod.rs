@@ -31,6 +31,10 @@ pub const MIN_HOLDOUT_ROWS: usize = 10;
 /// training ΔBIC, then this many more by held-out score. The rest keep their screening figures.
 pub const FULL_FITS_BY_BIC: usize = 4;
 pub const FULL_FITS_BY_SCORE: usize = 2;
+/// A screened candidate is calibrated in full only if its screen shows some evidence: a ΔBIC below
+/// this (the verdict's own bar) or a held-out score above [`SCREEN_MIN_SCORE`].
+pub const SCREEN_MIN_DELTA_BIC: f64 = -10.0;
+pub const SCREEN_MIN_SCORE: f64 = 0.02;
 
 use rayon::prelude::*;
 use serde::{Serialize, Serializer};
@@ -162,6 +166,8 @@ pub struct Diagnosis {
     /// Causes accepted in a round and dropped by the backward check.
     pub dropped: Vec<Accepted>,
     pub rounds: Vec<Round>,
+    /// Wall time of each stage (s): the baseline, round 1, the later rounds and the check.
+    pub stage_s: BTreeMap<&'static str, f64>,
     /// The final model (every named cause), its figures against the baseline.
     pub joint: Option<Candidate>,
     /// Held-out RMS above the noise that the final model leaves, when above the noise ratio.
@@ -195,6 +201,7 @@ pub struct Report<'a> {
     pub causes: &'a [Accepted],
     pub remainder_um: f64,
     pub rounds: &'a [Round],
+    pub stage_s: &'a BTreeMap<&'static str, f64>,
 }
 
 impl Diagnosis {
@@ -236,6 +243,7 @@ impl Diagnosis {
             causes: &self.causes,
             remainder_um: self.remainder_um,
             rounds: &self.rounds,
+            stage_s: &self.stage_s,
         }
     }
 }
@@ -320,13 +328,16 @@ fn round_candidates(
         .collect::<Result<Vec<_>>>()?;
     // the full fits: the best by training evidence (a drifting sensor biases the held network,
     // so its screened held-out score can be poor while its ΔBIC is not), then the best by
-    // held-out score
+    // held-out score; a candidate whose screen shows no evidence at all is not refitted
+    let shows = |c: &Candidate| c.delta_bic < SCREEN_MIN_DELTA_BIC || c.score > SCREEN_MIN_SCORE;
     cands.sort_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic));
     let mut rest = cands.split_off(FULL_FITS_BY_BIC.min(cands.len()));
     rest.sort_by(|a, b| b.score.total_cmp(&a.score));
-    let more = rest.drain(..FULL_FITS_BY_SCORE.min(rest.len()));
+    let more: Vec<Candidate> = rest.drain(..FULL_FITS_BY_SCORE.min(rest.len())).collect();
     cands.extend(more);
-    let mut cands = cands
+    let (full, held): (Vec<Candidate>, Vec<Candidate>) = cands.into_iter().partition(shows);
+    rest.extend(held);
+    let mut cands = full
         .into_par_iter()
         .map(|c| {
             crate::interrupt::check()?;
@@ -392,6 +403,8 @@ pub fn diagnose(
     let mut copts = opts.calibration.clone();
     copts.axis = axis.clone();
     copts.fit_rows = Some(split);
+    let clock = std::time::Instant::now();
+    let mut stage_s = BTreeMap::new();
     let baseline = calibrate(m, train, &copts, None)?;
     let base_hold = score::holdout(&baseline, &held)?;
     let base = Baseline {
@@ -412,7 +425,12 @@ pub fn diagnose(
         split,
         axis: &axis,
     };
+    stage_s.insert("baseline", clock.elapsed().as_secs_f64());
     let (cands, untried_columns) = round_candidates(&cx, m, &base, &[], &[])?;
+    stage_s.insert(
+        "round_1",
+        clock.elapsed().as_secs_f64() - stage_s["baseline"],
+    );
     let noise = baseline.sigma_e;
     let (verdict1, chosen1) = verdict::rule(&cands, &base_hold, noise, opts);
     let outcome = rounds::run(
@@ -429,6 +447,10 @@ pub fn diagnose(
         chosen1,
         |mk, b, carried, taken| Ok(round_candidates(&cx, mk, b, carried, taken)?.0),
     )?;
+    stage_s.insert(
+        "later_rounds_and_check",
+        clock.elapsed().as_secs_f64() - stage_s["baseline"] - stage_s["round_1"],
+    );
     let first = outcome.causes.first();
     let verdict = match (first, chosen1) {
         (Some(c), _) => Verdict::Cause(c.cause),
@@ -488,6 +510,7 @@ pub fn diagnose(
         causes: outcome.causes,
         dropped: outcome.dropped,
         rounds: outcome.rounds,
+        stage_s,
         joint: outcome.joint,
         remainder_um,
         run: train.source.clone(),
