@@ -102,6 +102,7 @@ class RbfModel:
         n_centers: int | None = None,
         seed: int | None = None,
         rule: str | None = None,
+        max_candidates: int | None = None,
     ) -> RbfModel: ...
     def predict(self, x: _F64) -> _F64: ...
     @property

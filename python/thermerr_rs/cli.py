@@ -190,6 +190,7 @@ def _make_model(args: argparse.Namespace, n_train: int) -> Estimator:
         spread=args.spread,
         goal=args.goal if args.goal is not None else 0.1 * n_train,
         max_neurons=args.max_neurons,
+        max_candidates=args.max_candidates,
         n_centers=args.n_centers,
         seed=args.seed,
     )
@@ -470,6 +471,9 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--goal", type=float, default=None,
                    help="RBF sum-squared error goal in µm² (default: 0.1 µm² per training sample)")
     f.add_argument("--max-neurons", type=_positive_int, default=None)
+    f.add_argument("--max-candidates", type=_positive_int, default=500,
+                   help="RBF ols: candidate centres; above this many samples a seeded k-means++ pool of "
+                        "this many (default 500; at least the sample count: the exhaustive search)")
     f.add_argument("--n-centers", type=_positive_int, default=None, help="centres of the kmeans design")
     f.add_argument("--C", type=float, default=1.0, help="SVR box constraint (default 1; searched with --tune)")
     f.add_argument("--epsilon", type=float, default=0.1, help="SVR tube half-width in µm (default 0.1)")

@@ -20,16 +20,25 @@ class RBFNetwork(Regressor):
         minimum-norm least-squares solution if that is singular), so it interpolates the
         training data (MATLAB's ``/`` picks another of the exact solutions). ``"ols"`` — MATLAB ``newrb``: forward orthogonal least
         squares (Chen, Cowan, Grant 1991), adding the training vector that lowers the
-        sum-squared error most, until the error reaches ``goal`` or ``max_neurons``.
+        sum-squared error most, until the error reaches ``goal`` or ``max_neurons``. On at
+        most ``max_candidates`` samples every training vector is a candidate (the exhaustive
+        newrb search); on more, the candidates are ``max_candidates`` training vectors picked by
+        k-means++ (D² sampling, seeded by ``seed``), so a fit costs O(n·m) memory and per
+        neuron instead of O(n²), and it adds at most ``max_candidates`` neurons.
         ``"kmeans"`` — k-means centres (k-means++ seeded by ``seed``), least-squares weights.
     spread : width of every neuron, in input units.
     goal : sum-squared-error goal of the ``"ols"`` design (MATLAB's current ``newrb`` takes a
         *mean* squared error: multiply by the number of samples to compare).
     max_neurons : cap of the ``"ols"`` design (default: the number of samples).
     n_centers : centres of the ``"kmeans"`` design (default: min(n, 10)).
-    seed : seed of the k-means++ start.
+    seed : seed of the k-means++ start (``"kmeans"``) and of the candidate pool (``"ols"`` on
+        more than ``max_candidates`` samples); ``None`` is 0.
     rule : ``"ols"`` (largest error reduction) or ``"max_error"`` (the training vector with the
         largest current residual, as seed 003's text describes newrb).
+    max_candidates : candidate pool of the ``"ols"`` design (default 500): with more training
+        samples than this, the candidates are a seeded k-means++ pool of this many samples. Set
+        it to at least the number of samples for the exhaustive search (memory n², time n² per
+        neuron: minutes and gigabytes at 10 000 samples).
 
     Fitted attributes: ``centers_``, ``weights_``, ``bias_``, ``n_neurons_``, ``selected_``
     (training indices of the centres, exact/ols), ``sse_history_`` (ols: SSE after the bias and
@@ -49,6 +58,7 @@ class RBFNetwork(Regressor):
         n_centers: int | None = None,
         seed: int | None = None,
         rule: str = "ols",
+        max_candidates: int = 500,
     ) -> None:
         self.design = design
         self.spread = spread
@@ -57,6 +67,7 @@ class RBFNetwork(Regressor):
         self.n_centers = n_centers
         self.seed = seed
         self.rule = rule
+        self.max_candidates = max_candidates
 
     def _fit(self, x: F64, y: F64) -> None:
         self._inner = _core.RbfModel.fit(
@@ -64,6 +75,7 @@ class RBFNetwork(Regressor):
             max_neurons=None if self.max_neurons is None else int(self.max_neurons),
             n_centers=None if self.n_centers is None else int(self.n_centers),
             seed=None if self.seed is None else int(self.seed), rule=str(self.rule),
+            max_candidates=int(self.max_candidates),
         )
 
     def _predict(self, x: F64) -> F64:

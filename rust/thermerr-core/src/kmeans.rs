@@ -25,6 +25,21 @@ pub struct KMeans {
 
 /// k-means++ seeding (one candidate per step), from a seed.
 pub fn kmeans_plus_plus(x: Samples<'_>, k: usize, seed: u64) -> Result<Matrix> {
+    let chosen = kmeans_plus_plus_indices(x, k, seed)?;
+    let mut data = Vec::with_capacity(k * x.ncols());
+    for &i in &chosen {
+        data.extend_from_slice(x.row(i));
+    }
+    Ok(Matrix {
+        shape: [k, x.ncols()],
+        data,
+    })
+}
+
+/// The sample indices [`kmeans_plus_plus`] picks, in the order it picks them (D² sampling:
+/// a sample is drawn with probability proportional to its squared distance to the nearest one
+/// already picked; once every sample coincides with a picked one, the first unpicked index).
+pub fn kmeans_plus_plus_indices(x: Samples<'_>, k: usize, seed: u64) -> Result<Vec<usize>> {
     let n = x.nrows();
     if k == 0 || k > n {
         return Err(Error::param(
@@ -56,14 +71,7 @@ pub fn kmeans_plus_plus(x: Samples<'_>, k: usize, seed: u64) -> Result<Matrix> {
             d2[i] = d2[i].min(sq_dist(r, x.row(next)));
         }
     }
-    let mut data = Vec::with_capacity(k * x.ncols());
-    for &i in &chosen {
-        data.extend_from_slice(x.row(i));
-    }
-    Ok(Matrix {
-        shape: [k, x.ncols()],
-        data,
-    })
+    Ok(chosen)
 }
 
 fn assign(x: Samples<'_>, c: &Matrix, labels: &mut [usize]) -> f64 {

@@ -6,7 +6,9 @@
 //! system with Σw = 0), `Ols` (MATLAB `newrb`:
 //! forward orthogonal least squares, Chen–Cowan–Grant 1991, adding the training vector that lowers
 //! the sum-squared error most — or, with `Rule::MaxError`, the one with the largest residual —
-//! until the goal or the neuron cap) and `KMeans` (k-means centres, least-squares weights).
+//! until the goal or the neuron cap; on more than `max_candidates` samples the candidates are a
+//! seeded k-means++ pool of `max_candidates` training vectors) and `KMeans` (k-means centres,
+//! least-squares weights).
 
 use std::str::FromStr;
 
@@ -14,7 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{parse_name, Error, Result};
 #[cfg(feature = "fit")]
-use crate::kmeans::{kmeans, kmeans_plus_plus};
+use crate::kmeans::{kmeans, kmeans_plus_plus, kmeans_plus_plus_indices};
 #[cfg(feature = "fit")]
 use crate::linalg::{lstsq, solve};
 use crate::linear::check_features;
@@ -23,6 +25,14 @@ use crate::samples::check_target;
 use crate::samples::{sq_dist, Matrix, Samples};
 #[cfg(feature = "fit")]
 use rayon::prelude::*;
+
+/// Default candidate pool of the OLS design: every training vector up to this many samples, a
+/// seeded k-means++ pool of this many above.
+pub const MAX_CANDIDATES: usize = 500;
+
+fn default_max_candidates() -> usize {
+    MAX_CANDIDATES
+}
 
 /// √(−ln 0.5): MATLAB's radbas width constant (0.8326).
 pub const RADBAS: f64 = 0.832_554_611_157_697_7;
@@ -88,11 +98,15 @@ pub struct RbfValidParams {
     pub n_centers: Option<usize>,
     pub seed: Option<u64>,
     pub rule: Rule,
+    /// Candidate pool of the OLS design: with more samples than this, the candidates are this
+    /// many training vectors picked by k-means++ (seeded by `seed`); otherwise every sample.
+    #[serde(default = "default_max_candidates")]
+    pub max_candidates: usize,
 }
 
 impl Default for RbfParams {
     /// Exact design, spread 1, SSE goal 0, no neuron cap, min(n, 10) k-means centres, k-means++
-    /// seed 0, the OLS selection rule.
+    /// seed 0, the OLS selection rule, [`MAX_CANDIDATES`] OLS candidates.
     fn default() -> Self {
         RbfParams(RbfValidParams {
             design: Design::Exact,
@@ -102,6 +116,7 @@ impl Default for RbfParams {
             n_centers: None,
             seed: None,
             rule: Rule::Ols,
+            max_candidates: MAX_CANDIDATES,
         })
     }
 }
@@ -140,7 +155,7 @@ impl RbfParams {
         self
     }
 
-    /// Seed of the k-means++ start (`None`: 0).
+    /// Seed of the k-means++ start, and of the OLS candidate pool (`None`: 0).
     pub fn seed(mut self, seed: Option<u64>) -> Self {
         self.0.seed = seed;
         self
@@ -148,6 +163,15 @@ impl RbfParams {
 
     pub fn rule(mut self, rule: Rule) -> Self {
         self.0.rule = rule;
+        self
+    }
+
+    /// Candidate pool of the OLS design, >= 1: on at most this many samples every training
+    /// vector is a candidate (the exhaustive newrb search, O(n²) memory and O(n²) per neuron);
+    /// on more, a k-means++ pool of this many training vectors seeded by `seed` (O(n·m) memory
+    /// and per neuron, at most m neurons).
+    pub fn max_candidates(mut self, max_candidates: usize) -> Self {
+        self.0.max_candidates = max_candidates;
         self
     }
 
@@ -171,6 +195,9 @@ impl RbfParams {
         }
         if p.n_centers == Some(0) {
             return Err(Error::param("n_centers", "must be >= 1"));
+        }
+        if p.max_candidates == 0 {
+            return Err(Error::param("max_candidates", "must be >= 1"));
         }
         Ok(p)
     }
@@ -289,81 +316,142 @@ impl RbfValidParams {
         }
     }
 
+    /// The OLS candidates, ascending: every sample when there are at most `max_candidates`,
+    /// else the `max_candidates` samples k-means++ picks (seeded by `seed`, duplicates dropped).
+    fn candidate_pool(&self, x: Samples<'_>) -> Result<Vec<usize>> {
+        let n = x.nrows();
+        if n <= self.max_candidates {
+            return Ok((0..n).collect());
+        }
+        let mut pool = kmeans_plus_plus_indices(x, self.max_candidates, self.seed.unwrap_or(0))?;
+        pool.sort_unstable();
+        pool.dedup();
+        Ok(pool)
+    }
+
     /// Forward selection with modified Gram–Schmidt: every remaining candidate column is kept
     /// orthogonal to the bias and to the neurons chosen so far, so the error reduction of each
-    /// candidate is (wᵀy)²/(wᵀw) and one step costs O(n²).
+    /// candidate is (wᵀy)²/(wᵀw); one step costs O(n·m) for m candidates (m = n: O(n²)). The
+    /// candidates are updated in parallel, each with its own sums in a fixed order, so the result
+    /// does not depend on the thread count. With every sample a candidate the sums run left to
+    /// right (the arithmetic of the original exhaustive search, bit for bit); with a pool they
+    /// run in eight interleaved lanes (vectorised).
     fn fit_ols(&self, x: Samples<'_>, y: &[f64], b: f64) -> Result<RbfModel> {
+        struct Cand {
+            idx: usize,
+            col: Vec<f64>,
+            scale: f64,
+            ww: f64,
+            wy: f64,
+            used: bool,
+        }
         let n = x.nrows();
-        let cap = self.max_neurons.unwrap_or(n).min(n);
-        let mut cand: Vec<Vec<f64>> = (0..n)
-            .map(|j| {
-                (0..n)
-                    .map(|i| (-(b * b) * sq_dist(x.row(i), x.row(j))).exp())
-                    .collect()
-            })
-            .collect();
+        let pool = self.candidate_pool(x)?;
+        let lanes = pool.len() < n;
+        let dot = |a: &[f64], b: &[f64]| if lanes { dot8(a, b) } else { dot_seq(a, b) };
+        let cap = self.max_neurons.unwrap_or(n).min(pool.len());
         let mean = y.iter().sum::<f64>() / n as f64;
         let mut resid: Vec<f64> = y.iter().map(|v| v - mean).collect();
-        for c in cand.iter_mut() {
-            let m = c.iter().sum::<f64>() / n as f64;
-            c.iter_mut().for_each(|v| *v -= m);
-        }
-        let scale: Vec<f64> = cand
-            .iter()
-            .map(|c| c.iter().map(|v| v * v).sum::<f64>())
+        let min_len = (1 << 15) / n.max(1) + 1;
+        let mut cand: Vec<Cand> = pool
+            .par_iter()
+            .with_min_len(min_len)
+            .map(|&j| {
+                let mut col: Vec<f64> = (0..n)
+                    .map(|i| (-(b * b) * sq_dist(x.row(i), x.row(j))).exp())
+                    .collect();
+                let m = col.iter().sum::<f64>() / n as f64;
+                col.iter_mut().for_each(|v| *v -= m);
+                let scale = dot(&col, &col);
+                Cand {
+                    idx: j,
+                    scale,
+                    ww: scale,
+                    wy: dot(&col, &resid),
+                    col,
+                    used: false,
+                }
+            })
             .collect();
-        let mut sse = resid.iter().map(|v| v * v).sum::<f64>();
+        let mut sse = dot(&resid, &resid);
         let mut history = vec![sse];
-        let mut used = vec![false; n];
         let mut selected = Vec::new();
         while selected.len() < cap && sse > self.goal {
             crate::interrupt::check()?;
             let mut best: Option<(f64, usize)> = None;
-            for j in 0..n {
-                if used[j] {
-                    continue;
-                }
-                let ww: f64 = cand[j].iter().map(|v| v * v).sum();
-                if ww <= 1e-12 * scale[j].max(f64::MIN_POSITIVE) {
+            for (k, c) in cand.iter().enumerate() {
+                if c.used || c.ww <= 1e-12 * c.scale.max(f64::MIN_POSITIVE) {
                     continue;
                 }
                 let key = match self.rule {
-                    Rule::Ols => {
-                        let wy: f64 = cand[j].iter().zip(&resid).map(|(a, b)| a * b).sum();
-                        wy * wy / ww
-                    }
-                    Rule::MaxError => resid[j].abs(),
+                    Rule::Ols => c.wy * c.wy / c.ww,
+                    Rule::MaxError => resid[c.idx].abs(),
                 };
                 if best.is_none_or(|(v, _)| key > v) {
-                    best = Some((key, j));
+                    best = Some((key, k));
                 }
             }
             let Some((_, s)) = best else { break };
-            used[s] = true;
-            selected.push(s);
-            let w = std::mem::take(&mut cand[s]);
-            let ww: f64 = w.iter().map(|v| v * v).sum();
-            let wy: f64 = w.iter().zip(&resid).map(|(a, b)| a * b).sum();
+            let chosen = &mut cand[s];
+            chosen.used = true;
+            selected.push(chosen.idx);
+            let (ww, wy) = (chosen.ww, chosen.wy);
+            let w = std::mem::take(&mut chosen.col);
             for (r, wi) in resid.iter_mut().zip(&w) {
                 *r -= wy / ww * wi;
             }
-            sse = resid.iter().map(|v| v * v).sum();
+            sse = dot(&resid, &resid);
             history.push(sse);
-            for (j, c) in cand.iter_mut().enumerate() {
-                if used[j] {
-                    continue;
-                }
-                let p: f64 = c.iter().zip(&w).map(|(a, b)| a * b).sum::<f64>() / ww;
-                for (ci, wi) in c.iter_mut().zip(&w) {
-                    *ci -= p * wi;
-                }
+            if selected.len() == cap || sse <= self.goal {
+                break;
             }
+            cand.par_iter_mut()
+                .with_min_len(min_len)
+                .filter(|c| !c.used)
+                .for_each(|c| {
+                    let p = dot(&c.col, &w) / ww;
+                    for (ci, wi) in c.col.iter_mut().zip(&w) {
+                        *ci -= p * wi;
+                    }
+                    c.ww = dot(&c.col, &c.col);
+                    c.wy = dot(&c.col, &resid);
+                });
         }
+        drop(cand);
         let centers = rows_of(x, &selected);
         let a = design_matrix(x, &centers, b);
         let sol = lstsq(a.as_ref(), y)?;
         Ok(self.finish(centers, sol, selected, history))
     }
+}
+
+/// Σ aᵢbᵢ left to right.
+#[cfg(feature = "fit")]
+#[inline]
+fn dot_seq(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(a, b)| a * b).sum()
+}
+
+/// Σ aᵢbᵢ in eight interleaved partial sums (a fixed order the compiler vectorises).
+#[cfg(feature = "fit")]
+#[inline]
+fn dot8(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut acc = [0.0_f64; 8];
+    let (ac, bc) = (a.chunks_exact(8), b.chunks_exact(8));
+    let (ar, br) = (ac.remainder(), bc.remainder());
+    for (x, y) in ac.zip(bc) {
+        let (x, y): (&[f64; 8], &[f64; 8]) = (x.try_into().unwrap(), y.try_into().unwrap());
+        for ((s, x), y) in acc.iter_mut().zip(x).zip(y) {
+            *s += x * y;
+        }
+    }
+    let mut tail = 0.0;
+    for (x, y) in ar.iter().zip(br) {
+        tail += x * y;
+    }
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
 }
 
 impl RbfModel {
@@ -476,11 +564,69 @@ mod tests {
     }
 
     #[test]
+    fn ols_pool_above_max_candidates() {
+        // 300 samples, a pool of 40: the pool path (k-means++ candidates, lane sums)
+        let x: Vec<f64> = (0..300)
+            .flat_map(|i| [(i as f64 * 0.37).sin(), (i as f64 * 0.11).cos()])
+            .collect();
+        let y: Vec<f64> = x
+            .chunks(2)
+            .map(|r| (2.0 * r[0]).sin() + r[1] * r[1])
+            .collect();
+        let s = Samples::new(&x, 300, 2).unwrap();
+        let p = RbfParams::new()
+            .design(Design::Ols)
+            .spread(0.7)
+            .max_candidates(40)
+            .check()
+            .unwrap();
+        let net = p.fit(s, &y).unwrap();
+        let pool = p.candidate_pool(s).unwrap();
+        assert_eq!(pool.len(), 40);
+        assert!(pool.windows(2).all(|w| w[0] < w[1]));
+        assert!(net.selected.iter().all(|i| pool.contains(i)));
+        assert!(net.selected.len() <= 40);
+        assert!(net.sse_history.windows(2).all(|w| w[1] <= w[0] + 1e-9));
+        let pred = net.predict(s).unwrap();
+        let sse: f64 = pred.iter().zip(&y).map(|(a, b)| (a - b) * (a - b)).sum();
+        assert_relative_eq!(
+            sse,
+            *net.sse_history.last().unwrap(),
+            max_relative = 1e-6,
+            epsilon = 1e-9
+        );
+        assert_eq!(net, p.fit(s, &y).unwrap());
+        // a pool of every sample is the exhaustive search
+        let all = p.clone();
+        let all = RbfValidParams {
+            max_candidates: 300,
+            max_neurons: Some(10),
+            ..all
+        };
+        assert_eq!(all.candidate_pool(s).unwrap(), (0..300).collect::<Vec<_>>());
+        assert_eq!(all.fit(s, &y).unwrap().selected.len(), 10);
+    }
+
+    #[test]
+    fn dot8_is_a_dot_product() {
+        let a: Vec<f64> = (0..37).map(|i| (i as f64).sin()).collect();
+        let b: Vec<f64> = (0..37).map(|i| (i as f64 * 0.3).cos()).collect();
+        for k in [0, 1, 7, 8, 9, 16, 37] {
+            assert_relative_eq!(
+                dot8(&a[..k], &b[..k]),
+                dot_seq(&a[..k], &b[..k]),
+                epsilon = 1e-12
+            );
+        }
+    }
+
+    #[test]
     fn refuses_bad_params() {
         let (x, y) = data();
         let s = Samples::new(&x, 30, 2).unwrap();
         assert!(RbfParams::new().spread(0.0).check().is_err());
         assert!(RbfParams::new().n_centers(Some(0)).check().is_err());
+        assert!(RbfParams::new().max_candidates(0).check().is_err());
         assert!(RbfParams::new()
             .design(Design::KMeans)
             .n_centers(Some(31))

@@ -18,7 +18,7 @@ pub struct PyRbfModel {
 #[pymethods]
 impl PyRbfModel {
     #[staticmethod]
-    #[pyo3(signature = (x, y, *, design = None, spread = None, goal = None, max_neurons = None, n_centers = None, seed = None, rule = None))]
+    #[pyo3(signature = (x, y, *, design = None, spread = None, goal = None, max_neurons = None, n_centers = None, seed = None, rule = None, max_candidates = None))]
     #[allow(clippy::too_many_arguments)]
     fn fit(
         py: Python<'_>,
@@ -31,6 +31,7 @@ impl PyRbfModel {
         n_centers: Option<usize>,
         seed: Option<u64>,
         rule: Option<&str>,
+        max_candidates: Option<usize>,
     ) -> PyResult<Self> {
         let params = RbfParams::new()
             .given(parse(design)?, RbfParams::design)
@@ -39,7 +40,8 @@ impl PyRbfModel {
             .max_neurons(max_neurons)
             .n_centers(n_centers)
             .seed(seed)
-            .given(parse(rule)?, RbfParams::rule);
+            .given(parse(rule)?, RbfParams::rule)
+            .given(max_candidates, RbfParams::max_candidates);
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
         let inner = crate::detach(py, || params.check()?.fit(xs, ys))?;
         Ok(PyRbfModel { inner })
