@@ -32,8 +32,10 @@ import numpy as np
 import thermerr_rs as tr
 
 
-def make_run(n: int = 10_000, dt: float = 15.0, n_sensors: int = 16, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """Temperatures (n × n_sensors, °C; column 0 the ambient) and an error (µm)."""
+def make_run(n: int = 10_000, dt: float = 15.0, n_sensors: int = 16, seed: int = 0, t_noise: float = 0.03,
+             e_noise: float = 0.3) -> tuple[np.ndarray, np.ndarray]:
+    """Temperatures (n × n_sensors, °C; column 0 the ambient) and an error (µm), with white noise of
+    ``t_noise`` °C and ``e_noise`` µm."""
     rng = np.random.default_rng(seed)
     t = np.arange(n) * dt
     day = 86_400.0
@@ -61,12 +63,12 @@ def make_run(n: int = 10_000, dt: float = 15.0, n_sensors: int = 16, seed: int =
     share = rng.uniform(0.0, 1.0, n_sensors - 1)
     for tau, g, s in zip(taus, gains, share):
         cols.append(lag(amb, 0.5 * tau) + g * lag(s * power + (1 - s) * lag(power, 2 * tau), tau))
-    temps = np.column_stack(cols) + rng.normal(0, 0.03, (n, n_sensors))
+    temps = np.column_stack(cols) + rng.normal(0, t_noise, (n, n_sensors))
     # the error: hidden nodes with their own lags, relative to the run's start
     hidden = [lag(power, 1800.0) * 8.0, lag(power, 7200.0) * 10.0, lag(amb, 3600.0) - amb[0],
               lag(power, 400.0) * 3.0]
     err = 1.6 * hidden[0] + 1.1 * hidden[1] - 2.0 * hidden[2] + 1.5 * hidden[3]
-    err = err - err[0] + rng.normal(0, 0.3, n)
+    err = err - err[0] + rng.normal(0, e_noise, n)
     return temps, err
 
 
