@@ -89,7 +89,7 @@ class GreyBP(_Sequential):
     the network trains on at least ``large_n`` rows, Adam trains it on mini-batches instead of the
     whole batch. The rows are cut into blocks of ⌈n/100⌉ consecutive rows and every tenth block is
     held back for validation (10 %, in ten stretches over the run); the others are visited in
-    mini-batches of 128 in an order shuffled by ``seed``; at most max(20, ⌈10⁶ / training rows⌉)
+    mini-batches of 128 in an order shuffled by ``seed``; at most max(20, ⌈500 000 / training rows⌉)
     epochs (and ``max_epochs``); training stops at the MSE goal or when the validation MSE has not
     improved by 1e-6 (relative) in min(``patience``, 20) epochs, and the network of the lowest
     validation MSE is kept. ``history_`` then holds each epoch's mean mini-batch MSE. Below

@@ -430,7 +430,7 @@ pub struct Trained {
 pub const LARGE_N_BATCH: usize = 128;
 /// Sample gradients the large-n rule spends at most: its epoch cap is
 /// max([`LARGE_N_MIN_EPOCHS`], ⌈budget / training rows⌉).
-pub const LARGE_N_BUDGET: usize = 1_000_000;
+pub const LARGE_N_BUDGET: usize = 500_000;
 /// Fewest epochs of the large-n rule's cap.
 pub const LARGE_N_MIN_EPOCHS: usize = 20;
 /// Largest patience (in epochs, on the validation MSE) of the large-n rule.
