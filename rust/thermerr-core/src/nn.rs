@@ -516,7 +516,11 @@ impl Flat {
         self.acts[..row.len()].copy_from_slice(row);
         for l in 0..nl {
             let (n_in, n_out) = (self.sizes[l], self.sizes[l + 1]);
-            let act = if l == nl - 1 { self.output } else { self.hidden };
+            let act = if l == nl - 1 {
+                self.output
+            } else {
+                self.hidden
+            };
             let (lo, hi) = self.acts.split_at_mut(self.aoff[l + 1]);
             let a_in = &lo[self.aoff[l]..];
             let wl = &theta[self.woff[l]..self.woff[l] + n_in * n_out];
@@ -933,6 +937,64 @@ mod tests {
         let mut scratch = vec![0.0; a.net.scratch_len()];
         let p = a.net.predict_one(&[0.5], &mut scratch);
         assert!((p - 1.5f64.sin()).abs() < 0.05);
+    }
+
+    #[test]
+    fn large_n_holds_back_ten_stretches_of_rows() {
+        for n in [100, 2000, 9_990, 10_001] {
+            let held: Vec<usize> = (0..n).filter(|&i| large_n_validation(n, i)).collect();
+            // whole blocks of consecutive rows, every tenth: about 10 %
+            assert!(
+                (held.len() as f64 / n as f64 - 0.1).abs() < 0.02,
+                "{n}: {}",
+                held.len()
+            );
+            let stretches = 1 + held.windows(2).filter(|w| w[1] != w[0] + 1).count();
+            assert_eq!(stretches, 10, "{n}");
+        }
+    }
+
+    #[test]
+    fn large_n_rule_trains_on_mini_batches_deterministically() {
+        let n = 3000;
+        let x: Vec<f64> = (0..n).map(|i| i as f64 / (n - 1) as f64).collect();
+        let y: Vec<f64> = x
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (3.0 * v).sin() + 0.01 * ((i * 7919) % 13) as f64 / 13.0)
+            .collect();
+        let s = Samples::new(&x, n, 1).unwrap();
+        let p = |large: Option<usize>| {
+            params(Trainer::Adam)
+                .lr(0.01)
+                .max_epochs(4000)
+                .goal(Some(0.0))
+                .patience(500)
+                .large_n(large)
+                .check()
+                .unwrap()
+        };
+        let big = p(Some(2000));
+        assert!(big.uses_large_n(n) && !big.uses_large_n(n - 1001));
+        let a = big.train(s, &y).unwrap();
+        let cap = LARGE_N_MIN_EPOCHS.max(LARGE_N_BUDGET.div_ceil(n - 300));
+        assert!(!a.history.is_empty() && a.history.len() <= cap);
+        let b = big.train(s, &y).unwrap();
+        assert_eq!((a.net.clone(), a.history.clone()), (b.net, b.history));
+        // the network fits the curve about as well as 4000 full-batch epochs
+        let full = p(None).train(s, &y).unwrap();
+        assert_eq!(full.history.len(), 4000);
+        let mse = |net: &Mlp| mse_grad(net, s, &y).0;
+        assert!(
+            mse(&a.net) < 2.0 * mse(&full.net).max(1e-4),
+            "{} vs {}",
+            mse(&a.net),
+            mse(&full.net)
+        );
+        // the seed's trainer never takes the rule
+        let gd = params(Trainer::Gd).large_n(Some(2000)).check().unwrap();
+        assert!(!gd.uses_large_n(n));
+        assert!(params(Trainer::Adam).large_n(Some(99)).check().is_err());
     }
 
     #[test]
