@@ -294,6 +294,7 @@ class GreyModel:
         patience: int | None = None,
         init: float | None = None,
         seed: int | None = None,
+        large_n: int | None = None,  # rows from which Adam takes the large-n rule; 0: never
     ) -> GreyModel: ...
     @staticmethod
     def fit_gm1n(x: _F64, y: _F64, *, window: int | None = None) -> GreyModel: ...
@@ -353,6 +354,7 @@ class HybridModel:
         patience: int | None = None,
         init: float | None = None,
         seed: int | None = None,
+        large_n: int | None = None,  # rows from which Adam takes the large-n rule; 0: never
     ) -> HybridModel: ...
     def predict(self, x: _F64, y: _F64 | None = None) -> _F64: ...
     @property

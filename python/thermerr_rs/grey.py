@@ -22,6 +22,18 @@ def _net_kw(est: Any) -> dict[str, Any]:
     )
 
 
+def _large_n(v: int | None) -> int:
+    """``large_n`` as the core takes it: 0 for never."""
+    if v is None:
+        return 0
+    v = int(v)
+    if v <= 0:
+        from .errors import ParameterError
+
+        raise ParameterError(f"invalid parameter `large_n`: must be >= 100 (or None), got {v}")
+    return v
+
+
 class _Sequential(SequenceModel):
     """A model of a time-ordered series whose prediction at step k uses the errors before k."""
 
@@ -72,6 +84,16 @@ class GreyBP(_Sequential):
     ≤ 8000 epochs, MSE goal 0.01, initial weights uniform in [−1, 1]); ``"adam"`` trains the same
     network with Adam until the MSE goal (1e-5 by default) or a 500-epoch plateau. Fit on a
     time-ordered series; see :meth:`predict` for closed-loop and one-step-ahead prediction.
+
+    **Large n** (``large_n``, 2000 rows by default; ``None``: never; the seed's trainer never): when
+    the network trains on at least ``large_n`` rows, Adam trains it on mini-batches instead of the
+    whole batch. The rows are cut into blocks of ⌈n/100⌉ consecutive rows and every tenth block is
+    held back for validation (10 %, in ten stretches over the run); the others are visited in
+    mini-batches of 128 in an order shuffled by ``seed``; at most max(20, ⌈500 000 / training rows⌉)
+    epochs (and ``max_epochs``); training stops at the MSE goal or when the validation MSE has not
+    improved by 1e-6 (relative) in min(``patience``, 20) epochs, and the network of the lowest
+    validation MSE is kept. ``history_`` then holds each epoch's mean mini-batch MSE. Below
+    ``large_n`` rows (the seeds' runs) training is the full-batch method, unchanged.
     """
 
     kind = "greybp"
@@ -79,7 +101,8 @@ class GreyBP(_Sequential):
 
     def __init__(self, *, windows: tuple[int, ...] | list[int] = (6, 8, 10), hidden: int = 7,
                  trainer: str = "adam", lr: float = 0.01, momentum: float = 0.9, max_epochs: int = 8000,
-                 goal: float | None = None, patience: int = 500, seed: int = 0) -> None:
+                 goal: float | None = None, patience: int = 500, seed: int = 0,
+                 large_n: int | None = 2000) -> None:
         self.windows = windows
         self.hidden = hidden
         self.trainer = trainer
@@ -89,10 +112,12 @@ class GreyBP(_Sequential):
         self.goal = goal
         self.patience = patience
         self.seed = seed
+        self.large_n = large_n
 
     def _fit(self, x: F64, y: F64) -> None:
         self._inner = _core.GreyModel.fit(x, y, windows=[int(w) for w in self.windows],
-                                          hidden=int(self.hidden), **_net_kw(self))
+                                          hidden=int(self.hidden), large_n=_large_n(self.large_n),
+                                          **_net_kw(self))
 
 
 

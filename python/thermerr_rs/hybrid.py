@@ -10,7 +10,7 @@ import numpy as np
 from . import _core
 from ._arrays import F64, feature_names, series_name
 from .errors import ShapeError
-from .grey import _Sequential
+from .grey import _large_n, _Sequential
 
 
 class HybridFilterNet(_Sequential):
@@ -25,6 +25,16 @@ class HybridFilterNet(_Sequential):
     descent with momentum for ``max_epochs`` (10 000) iterations, ``"adam"`` Adam until a
     500-epoch plateau. Fit on one time-ordered run, or several with ``fit(X, y, starts=[...])``
     (the first row of each run after the first); predict closed loop or one step ahead.
+
+    **Large n** (``large_n``, 2000 rows by default; ``None``: never; the seed's trainer never): when
+    the network trains on at least ``large_n`` rows, Adam trains it on mini-batches instead of the
+    whole batch. The rows are cut into blocks of ⌈n/100⌉ consecutive rows and every tenth block is
+    held back for validation (10 %, in ten stretches over the run); the others are visited in
+    mini-batches of 128 in an order shuffled by ``seed``; at most max(20, ⌈500 000 / training rows⌉)
+    epochs (and ``max_epochs``); training stops at the MSE goal or when the validation MSE has not
+    improved by 1e-6 (relative) in min(``patience``, 20) epochs, and the network of the lowest
+    validation MSE is kept. ``history_`` then holds each epoch's mean mini-batch MSE. Below
+    ``large_n`` rows (the seeds' runs) training is the full-batch method, unchanged.
     """
 
     kind = "hybrid"
@@ -32,7 +42,8 @@ class HybridFilterNet(_Sequential):
 
     def __init__(self, *, variant: str = "hybrid", ma_lags: int = 1, ar_lags: int = 2, c_y: float = 0.02,
                  limit: float = 50.0, hidden: int = 30, trainer: str = "adam", lr: float = 0.01,
-                 momentum: float = 0.9, max_epochs: int = 10000, patience: int = 500, seed: int = 0) -> None:
+                 momentum: float = 0.9, max_epochs: int = 10000, patience: int = 500, seed: int = 0,
+                 large_n: int | None = 2000) -> None:
         self.variant = variant
         self.ma_lags = ma_lags
         self.ar_lags = ar_lags
@@ -45,6 +56,7 @@ class HybridFilterNet(_Sequential):
         self.max_epochs = max_epochs
         self.patience = patience
         self.seed = seed
+        self.large_n = large_n
 
     def fit(self, X: Any, y: Any, starts: list[int] | None = None) -> HybridFilterNet:  # type: ignore[override]
         """Fit on one time-ordered run, or on several stacked: ``starts`` are the first rows of
@@ -61,6 +73,7 @@ class HybridFilterNet(_Sequential):
             ar_lags=int(self.ar_lags), c_y=float(self.c_y), limit=float(self.limit), hidden=int(self.hidden),
             trainer=str(self.trainer), lr=float(self.lr), momentum=float(self.momentum),
             max_epochs=int(self.max_epochs), patience=int(self.patience), seed=int(self.seed),
+            large_n=_large_n(self.large_n),
         )
 
     def fit_runs(self, runs: list[Any], target: str, features: list[str], *, inputs: str = "absolute") -> HybridFilterNet:

@@ -268,12 +268,22 @@ pub struct BpValidParams {
     /// Epochs without improvement after which Adam stops (the seed's trainer ignores it).
     pub patience: usize,
     pub seed: u64,
+    /// Rows from which Adam trains by the large-n rule (`None`: never; the seed's trainer never
+    /// does): 10 % of the rows held back for validation in ten stretches
+    /// ([`large_n_validation`]), mini-batches of [`LARGE_N_BATCH`] rows in an order shuffled by
+    /// the seed (ChaCha8, stream 1), at most max([`LARGE_N_MIN_EPOCHS`],
+    /// ⌈[`LARGE_N_BUDGET`] / training rows⌉) epochs (and `max_epochs`), stopped at the MSE goal
+    /// (of an epoch's mini-batches) or when the validation MSE has not improved by 1e-6
+    /// (relative) for min(`patience`, [`LARGE_N_PATIENCE`]) epochs; the network of the lowest
+    /// validation MSE is kept, and the history holds each epoch's mean mini-batch MSE.
+    #[serde(default)]
+    pub large_n: Option<usize>,
 }
 
 impl Default for BpParams {
     /// 7 sigmoid hidden units, linear output of scale 1, initial weights in [−1, 1]; Adam with
     /// lr 0.01 (momentum 0.9 for the seed's trainer), at most 8000 epochs, the trainer's MSE goal,
-    /// patience 500, seed 0.
+    /// patience 500, seed 0; no large-n rule.
     fn default() -> Self {
         BpParams(BpValidParams {
             hidden_sizes: vec![7],
@@ -288,6 +298,7 @@ impl Default for BpParams {
             goal: None,
             patience: 500,
             seed: 0,
+            large_n: None,
         })
     }
 }
@@ -364,9 +375,24 @@ impl BpParams {
         self
     }
 
+    /// Rows from which Adam trains by the large-n rule ([`BpValidParams::large_n`]); `None`:
+    /// never. At least [`LARGE_N_MIN`].
+    pub fn large_n(mut self, large_n: Option<usize>) -> Self {
+        self.0.large_n = large_n;
+        self
+    }
+
     /// Validates every parameter (none depends on the data).
     pub fn check(self) -> Result<BpValidParams> {
         let p = self.0;
+        if let Some(l) = p.large_n {
+            if l < LARGE_N_MIN {
+                return Err(Error::param(
+                    "large_n",
+                    format!("must be >= {LARGE_N_MIN} (or none), got {l}"),
+                ));
+            }
+        }
         if p.hidden_sizes.contains(&0) {
             return Err(Error::param("hidden", "layer widths must be >= 1"));
         }
@@ -400,6 +426,186 @@ pub struct Trained {
     pub history: Vec<f64>,
 }
 
+/// Rows per mini-batch of the large-n rule.
+pub const LARGE_N_BATCH: usize = 128;
+/// Sample gradients the large-n rule spends at most: its epoch cap is
+/// max([`LARGE_N_MIN_EPOCHS`], ⌈budget / training rows⌉).
+pub const LARGE_N_BUDGET: usize = 500_000;
+/// Fewest epochs of the large-n rule's cap.
+pub const LARGE_N_MIN_EPOCHS: usize = 20;
+/// Largest patience (in epochs, on the validation MSE) of the large-n rule.
+pub const LARGE_N_PATIENCE: usize = 20;
+/// `large_n` of the sequence models (hybrid filter + network, rolling GM + BP): their seeds'
+/// runs have a few hundred rows, a long logged run tens of thousands.
+pub const LARGE_N_DEFAULT: usize = 2000;
+/// Smallest accepted `large_n`.
+pub const LARGE_N_MIN: usize = 100;
+
+/// The rows the large-n rule holds back for validation: the rows are cut into blocks of
+/// ⌈n / 100⌉ consecutive rows and every tenth block (the 10th, 20th, …) is held back — 10 % of
+/// the rows, in ten stretches spread over the run (neighbouring samples of a run are nearly
+/// equal, so single held-back rows would validate on what the network trains on).
+pub fn large_n_validation(n: usize, row: usize) -> bool {
+    let block = n.div_ceil(100).max(1);
+    (row / block) % 10 == 9
+}
+
+/// The layout of a network's parameters as one vector (weights of every layer, then biases of
+/// every layer: the order of [`params_mut`]) and scratch space for back-propagation.
+#[cfg(feature = "fit")]
+struct Flat {
+    sizes: Vec<usize>,
+    hidden: Act,
+    output: Act,
+    scale: f64,
+    woff: Vec<usize>,
+    boff: Vec<usize>,
+    aoff: Vec<usize>,
+    acts: Vec<f64>,
+    delta: Vec<f64>,
+}
+
+#[cfg(feature = "fit")]
+impl Flat {
+    fn new(net: &Mlp) -> Self {
+        let nl = net.weights.len();
+        let mut woff = Vec::with_capacity(nl);
+        let mut boff = Vec::with_capacity(nl);
+        let mut aoff = Vec::with_capacity(nl + 1);
+        let mut o = 0;
+        for w in &net.weights {
+            woff.push(o);
+            o += w.len();
+        }
+        for b in &net.biases {
+            boff.push(o);
+            o += b.len();
+        }
+        let mut a = 0;
+        for &s in &net.sizes {
+            aoff.push(a);
+            a += s;
+        }
+        Flat {
+            sizes: net.sizes.clone(),
+            hidden: net.hidden,
+            output: net.output,
+            scale: net.output_scale,
+            woff,
+            boff,
+            aoff,
+            acts: vec![0.0; a],
+            delta: vec![0.0; a],
+        }
+    }
+
+    fn theta(net: &Mlp) -> Vec<f64> {
+        flat(net).collect()
+    }
+
+    fn store(theta: &[f64], net: &mut Mlp) {
+        for (p, v) in params_mut(net).zip(theta) {
+            *p = *v;
+        }
+    }
+
+    /// Forward pass of one row into `self.acts`; the output activation.
+    #[inline]
+    fn forward(&mut self, theta: &[f64], row: &[f64]) -> f64 {
+        let nl = self.sizes.len() - 1;
+        self.acts[..row.len()].copy_from_slice(row);
+        for l in 0..nl {
+            let (n_in, n_out) = (self.sizes[l], self.sizes[l + 1]);
+            let act = if l == nl - 1 {
+                self.output
+            } else {
+                self.hidden
+            };
+            let (lo, hi) = self.acts.split_at_mut(self.aoff[l + 1]);
+            let a_in = &lo[self.aoff[l]..];
+            let wl = &theta[self.woff[l]..self.woff[l] + n_in * n_out];
+            let bl = &theta[self.boff[l]..self.boff[l] + n_out];
+            for ((w, b), out) in wl.chunks_exact(n_in).zip(bl).zip(&mut hi[..n_out]) {
+                let s = b + w.iter().zip(a_in).map(|(a, b)| a * b).sum::<f64>();
+                *out = act.f(s);
+            }
+        }
+        self.acts[self.aoff[nl]]
+    }
+
+    /// Sum of squared errors over `rows` (by index into `x`, in order), forward only.
+    fn sse(&mut self, theta: &[f64], x: Samples<'_>, y: &[f64], rows: Option<&[usize]>) -> f64 {
+        let mut sse = 0.0;
+        let mut one = |this: &mut Self, i: usize| {
+            let e = this.forward(theta, x.row(i)) * this.scale - y[i];
+            sse += e * e;
+        };
+        match rows {
+            None => (0..x.nrows()).for_each(|i| one(self, i)),
+            Some(r) => r.iter().for_each(|&i| one(self, i)),
+        }
+        sse
+    }
+
+    /// Gradient of the MSE over `rows` (all rows for `None`) into `grad`; returns the sum of
+    /// squared errors. The arithmetic, and its order, of the per-sample loop it replaced.
+    fn grad(
+        &mut self,
+        theta: &[f64],
+        x: Samples<'_>,
+        y: &[f64],
+        rows: Option<&[usize]>,
+        grad: &mut [f64],
+    ) -> f64 {
+        grad.iter_mut().for_each(|g| *g = 0.0);
+        let n = rows.map_or(x.nrows(), <[usize]>::len) as f64;
+        let mut sse = 0.0;
+        let mut one = |this: &mut Self, i: usize| {
+            let out = this.forward(theta, x.row(i));
+            let e = out * this.scale - y[i];
+            sse += e * e;
+            this.backward(theta, out, e, n, grad);
+        };
+        match rows {
+            None => (0..x.nrows()).for_each(|i| one(self, i)),
+            Some(r) => r.iter().for_each(|&i| one(self, i)),
+        }
+        sse
+    }
+
+    #[inline]
+    fn backward(&mut self, theta: &[f64], out: f64, e: f64, n: f64, grad: &mut [f64]) {
+        let nl = self.sizes.len() - 1;
+        // d(e²)/d(out) = 2e·scale; through the output activation
+        self.delta[self.aoff[nl]] = 2.0 * e * self.scale * self.output.df(out) / n;
+        for l in (0..nl).rev() {
+            let (n_in, n_out) = (self.sizes[l], self.sizes[l + 1]);
+            let (a0, a1) = (self.aoff[l], self.aoff[l + 1]);
+            let (wo, bo) = (self.woff[l], self.boff[l]);
+            let (dlo, dhi) = self.delta.split_at_mut(a1);
+            let d_out = &dhi[..n_out];
+            let a_in = &self.acts[a0..a1];
+            for (o, &d) in d_out.iter().enumerate() {
+                grad[bo + o] += d;
+                let gw = &mut grad[wo + o * n_in..wo + (o + 1) * n_in];
+                for (g, a) in gw.iter_mut().zip(a_in) {
+                    *g += d * a;
+                }
+            }
+            if l > 0 {
+                let wl = &theta[wo..wo + n_in * n_out];
+                for k in 0..n_in {
+                    let mut s = 0.0;
+                    for o in 0..n_out {
+                        s += wl[o * n_in + k] * d_out[o];
+                    }
+                    dlo[a0 + k] = s * self.hidden.df(a_in[k]);
+                }
+            }
+        }
+    }
+}
+
 #[cfg(feature = "fit")]
 impl BpValidParams {
     /// The initial network of this seed.
@@ -427,22 +633,34 @@ impl BpValidParams {
         }
     }
 
+    /// Whether the large-n rule trains on `n` rows (Adam only).
+    pub fn uses_large_n(&self, n: usize) -> bool {
+        self.trainer == Trainer::Adam && self.large_n.is_some_and(|l| n >= l)
+    }
+
     /// Trains the network itself on the rows of `x` to the targets `y` (in output units, i.e.
     /// including the scale), with no scaling of its own.
     pub(crate) fn train(&self, x: Samples<'_>, y: &[f64]) -> Result<Trained> {
         x.require_finite("X")?;
         check_target(y, x.nrows())?;
+        if self.uses_large_n(x.nrows()) {
+            return self.train_large(x, y);
+        }
         let mut net = self.init_net(x.ncols());
+        let mut fl = Flat::new(&net);
+        let mut theta = Flat::theta(&net);
+        let mut grad = vec![0.0; theta.len()];
+        let n = x.nrows() as f64;
         let (lr, max_epochs) = (self.lr, self.max_epochs);
         let goal = self.goal.unwrap_or(self.trainer.default_goal());
         let history = match self.trainer {
             Trainer::Gd => {
                 let momentum = self.momentum;
-                let mut vel = zeros_like(&net);
+                let mut vel = vec![0.0; theta.len()];
                 let mut hist = Vec::new();
                 for _ in 0..max_epochs {
                     crate::interrupt::check()?;
-                    let (mse, grad) = mse_grad(&net, x, y);
+                    let mse = fl.grad(&theta, x, y, None, &mut grad) / n;
                     hist.push(mse);
                     if !mse.is_finite() {
                         return Err(Error::Numerical("the training error diverged".into()));
@@ -450,10 +668,7 @@ impl BpValidParams {
                     if mse <= goal {
                         break;
                     }
-                    for ((p, v), g) in params_mut(&mut net)
-                        .zip(params_mut(&mut vel))
-                        .zip(flat(&grad))
-                    {
+                    for ((p, v), g) in theta.iter_mut().zip(&mut vel).zip(&grad) {
                         *v = momentum * *v - lr * g;
                         *p += *v;
                     }
@@ -462,22 +677,24 @@ impl BpValidParams {
             }
             Trainer::Adam => {
                 let patience = self.patience;
-                let (b1, b2, eps) = (0.9f64, 0.999f64, 1e-8);
-                let mut m = zeros_like(&net);
-                let mut v = zeros_like(&net);
+                let mut m = vec![0.0; theta.len()];
+                let mut v = vec![0.0; theta.len()];
                 let mut hist = Vec::new();
                 let mut best = f64::INFINITY;
-                let mut best_net = net.clone();
+                let mut best_theta = theta.clone();
                 let mut since = 0usize;
                 for t in 1..=max_epochs {
-                    let (mse, grad) = mse_grad(&net, x, y);
+                    if t % 64 == 0 {
+                        crate::interrupt::check()?;
+                    }
+                    let mse = fl.grad(&theta, x, y, None, &mut grad) / n;
                     hist.push(mse);
                     if !mse.is_finite() {
                         return Err(Error::Numerical("the training error diverged".into()));
                     }
                     if mse < best * (1.0 - 1e-6) {
                         best = mse;
-                        best_net = net.clone();
+                        best_theta.copy_from_slice(&theta);
                         since = 0;
                     } else {
                         since += 1;
@@ -485,24 +702,80 @@ impl BpValidParams {
                     if mse <= goal || since >= patience {
                         break;
                     }
-                    let (c1, c2) = (1.0 - b1.powi(t as i32), 1.0 - b2.powi(t as i32));
-                    for (((p, mm), vv), g) in params_mut(&mut net)
-                        .zip(params_mut(&mut m))
-                        .zip(params_mut(&mut v))
-                        .zip(flat(&grad))
-                    {
-                        *mm = b1 * *mm + (1.0 - b1) * g;
-                        *vv = b2 * *vv + (1.0 - b2) * g * g;
-                        *p -= lr * (*mm / c1) / ((*vv / c2).sqrt() + eps);
-                    }
+                    adam_step(&mut theta, &mut m, &mut v, &grad, lr, t);
                 }
-                if mse_grad(&net, x, y).0 > best {
-                    net = best_net;
+                if fl.sse(&theta, x, y, None) / n > best {
+                    theta = best_theta;
                 }
                 hist
             }
         };
+        Flat::store(&theta, &mut net);
         Ok(Trained { net, history })
+    }
+
+    /// The large-n rule (module documentation of [`BpValidParams::large_n`]): Adam on seeded
+    /// shuffled mini-batches, an epoch cap from a budget of sample gradients, early stopping on
+    /// held-back blocks of rows, the network of the lowest validation MSE kept.
+    fn train_large(&self, x: Samples<'_>, y: &[f64]) -> Result<Trained> {
+        use rand::seq::SliceRandom;
+        use rand::SeedableRng;
+        let n = x.nrows();
+        let (mut train, mut val) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            if large_n_validation(n, i) {
+                val.push(i);
+            } else {
+                train.push(i);
+            }
+        }
+        let mut net = self.init_net(x.ncols());
+        let mut fl = Flat::new(&net);
+        let mut theta = Flat::theta(&net);
+        let mut grad = vec![0.0; theta.len()];
+        let (mut m, mut v) = (vec![0.0; theta.len()], vec![0.0; theta.len()]);
+        let goal = self.goal.unwrap_or(self.trainer.default_goal());
+        let max_epochs = self
+            .max_epochs
+            .min(LARGE_N_MIN_EPOCHS.max(LARGE_N_BUDGET.div_ceil(train.len())));
+        let patience = self.patience.clamp(1, LARGE_N_PATIENCE);
+        // the order of the rows: the model's seed on a stream of its own (the initial weights
+        // take stream 0)
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(self.seed);
+        rng.set_stream(1);
+        let mut best = fl.sse(&theta, x, y, Some(&val)) / val.len() as f64;
+        let mut best_theta = theta.clone();
+        let mut since = 0usize;
+        let mut hist = Vec::new();
+        let mut t = 0usize;
+        for _ in 0..max_epochs {
+            crate::interrupt::check()?;
+            train.shuffle(&mut rng);
+            let mut sse = 0.0;
+            for batch in train.chunks(LARGE_N_BATCH) {
+                sse += fl.grad(&theta, x, y, Some(batch), &mut grad);
+                t += 1;
+                adam_step(&mut theta, &mut m, &mut v, &grad, self.lr, t);
+            }
+            let mse = sse / train.len() as f64;
+            hist.push(mse);
+            if !mse.is_finite() {
+                return Err(Error::Numerical("the training error diverged".into()));
+            }
+            let val_mse = fl.sse(&theta, x, y, Some(&val)) / val.len() as f64;
+            if val_mse < best * (1.0 - 1e-6) {
+                best = val_mse;
+                best_theta.copy_from_slice(&theta);
+                since = 0;
+            } else {
+                since += 1;
+            }
+            if mse <= goal || since >= patience {
+                break;
+            }
+        }
+        Flat::store(&best_theta, &mut net);
+        Ok(Trained { net, history: hist })
     }
 
     /// Fits a [`BpModel`]: inputs and target min–max scaled by the training ranges.
@@ -538,13 +811,17 @@ impl BpValidParams {
     }
 }
 
+/// One Adam step (β1 0.9, β2 0.999, ε 1e-8) at step `t` (from 1).
 #[cfg(feature = "fit")]
-fn zeros_like(net: &Mlp) -> Mlp {
-    let mut z = net.clone();
-    for w in z.weights.iter_mut().chain(z.biases.iter_mut()) {
-        w.iter_mut().for_each(|v| *v = 0.0);
+#[inline]
+fn adam_step(theta: &mut [f64], m: &mut [f64], v: &mut [f64], grad: &[f64], lr: f64, t: usize) {
+    let (b1, b2, eps) = (0.9f64, 0.999f64, 1e-8);
+    let (c1, c2) = (1.0 - b1.powi(t as i32), 1.0 - b2.powi(t as i32));
+    for (((p, mm), vv), &g) in theta.iter_mut().zip(m).zip(v).zip(grad) {
+        *mm = b1 * *mm + (1.0 - b1) * g;
+        *vv = b2 * *vv + (1.0 - b2) * g * g;
+        *p -= lr * (*mm / c1) / ((*vv / c2).sqrt() + eps);
     }
-    z
 }
 
 #[cfg(feature = "fit")]
@@ -566,52 +843,13 @@ fn flat(net: &Mlp) -> impl Iterator<Item = f64> + '_ {
 /// Batch MSE = mean((ŷ − y)²) and its gradient (as an `Mlp` holding the partial derivatives).
 #[cfg(feature = "fit")]
 pub fn mse_grad(net: &Mlp, x: Samples<'_>, y: &[f64]) -> (f64, Mlp) {
-    let n = x.nrows();
-    let nl = net.weights.len();
-    let mut grad = zeros_like(net);
-    // activations of every layer for one sample
-    let mut acts: Vec<Vec<f64>> = net.sizes.iter().map(|&s| vec![0.0; s]).collect();
-    let mut delta: Vec<Vec<f64>> = net.sizes.iter().map(|&s| vec![0.0; s]).collect();
-    let mut sse = 0.0;
-    for (i, row) in x.rows().enumerate() {
-        acts[0].copy_from_slice(row);
-        for l in 0..nl {
-            let (n_in, n_out) = (net.sizes[l], net.sizes[l + 1]);
-            let act = if l == nl - 1 { net.output } else { net.hidden };
-            let (lo, hi) = acts.split_at_mut(l + 1);
-            for o in 0..n_out {
-                let w = &net.weights[l][o * n_in..(o + 1) * n_in];
-                let s = net.biases[l][o] + w.iter().zip(&lo[l]).map(|(a, b)| a * b).sum::<f64>();
-                hi[0][o] = act.f(s);
-            }
-        }
-        let out = acts[nl][0];
-        let e = out * net.output_scale - y[i];
-        sse += e * e;
-        // d(e²)/d(out) = 2e·scale; through the output activation
-        delta[nl][0] = 2.0 * e * net.output_scale * net.output.df(out) / n as f64;
-        for l in (0..nl).rev() {
-            let (n_in, n_out) = (net.sizes[l], net.sizes[l + 1]);
-            for o in 0..n_out {
-                let d = delta[l + 1][o];
-                grad.biases[l][o] += d;
-                let gw = &mut grad.weights[l][o * n_in..(o + 1) * n_in];
-                for (g, a) in gw.iter_mut().zip(&acts[l]) {
-                    *g += d * a;
-                }
-            }
-            if l > 0 {
-                for k in 0..n_in {
-                    let mut s = 0.0;
-                    for o in 0..n_out {
-                        s += net.weights[l][o * n_in + k] * delta[l + 1][o];
-                    }
-                    delta[l][k] = s * net.hidden.df(acts[l][k]);
-                }
-            }
-        }
-    }
-    (sse / n as f64, grad)
+    let mut fl = Flat::new(net);
+    let theta = Flat::theta(net);
+    let mut g = vec![0.0; theta.len()];
+    let sse = fl.grad(&theta, x, y, None, &mut g);
+    let mut grad = net.clone();
+    Flat::store(&g, &mut grad);
+    (sse / x.nrows() as f64, grad)
 }
 
 #[cfg(all(test, feature = "fit"))]
@@ -699,6 +937,64 @@ mod tests {
         let mut scratch = vec![0.0; a.net.scratch_len()];
         let p = a.net.predict_one(&[0.5], &mut scratch);
         assert!((p - 1.5f64.sin()).abs() < 0.05);
+    }
+
+    #[test]
+    fn large_n_holds_back_ten_stretches_of_rows() {
+        for n in [100, 2000, 9_990, 10_001] {
+            let held: Vec<usize> = (0..n).filter(|&i| large_n_validation(n, i)).collect();
+            // whole blocks of consecutive rows, every tenth: about 10 %
+            assert!(
+                (held.len() as f64 / n as f64 - 0.1).abs() < 0.02,
+                "{n}: {}",
+                held.len()
+            );
+            let stretches = 1 + held.windows(2).filter(|w| w[1] != w[0] + 1).count();
+            assert_eq!(stretches, 10, "{n}");
+        }
+    }
+
+    #[test]
+    fn large_n_rule_trains_on_mini_batches_deterministically() {
+        let n = 3000;
+        let x: Vec<f64> = (0..n).map(|i| i as f64 / (n - 1) as f64).collect();
+        let y: Vec<f64> = x
+            .iter()
+            .enumerate()
+            .map(|(i, v)| (3.0 * v).sin() + 0.01 * ((i * 7919) % 13) as f64 / 13.0)
+            .collect();
+        let s = Samples::new(&x, n, 1).unwrap();
+        let p = |large: Option<usize>| {
+            params(Trainer::Adam)
+                .lr(0.01)
+                .max_epochs(4000)
+                .goal(Some(0.0))
+                .patience(500)
+                .large_n(large)
+                .check()
+                .unwrap()
+        };
+        let big = p(Some(2000));
+        assert!(big.uses_large_n(n) && !big.uses_large_n(n - 1001));
+        let a = big.train(s, &y).unwrap();
+        let cap = LARGE_N_MIN_EPOCHS.max(LARGE_N_BUDGET.div_ceil(n - 300));
+        assert!(!a.history.is_empty() && a.history.len() <= cap);
+        let b = big.train(s, &y).unwrap();
+        assert_eq!((a.net.clone(), a.history.clone()), (b.net, b.history));
+        // the network fits the curve about as well as 4000 full-batch epochs
+        let full = p(None).train(s, &y).unwrap();
+        assert_eq!(full.history.len(), 4000);
+        let mse = |net: &Mlp| mse_grad(net, s, &y).0;
+        assert!(
+            mse(&a.net) < 2.0 * mse(&full.net).max(1e-4),
+            "{} vs {}",
+            mse(&a.net),
+            mse(&full.net)
+        );
+        // the seed's trainer never takes the rule
+        let gd = params(Trainer::Gd).large_n(Some(2000)).check().unwrap();
+        assert!(!gd.uses_large_n(n));
+        assert!(params(Trainer::Adam).large_n(Some(99)).check().is_err());
     }
 
     #[test]

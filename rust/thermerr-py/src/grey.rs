@@ -18,7 +18,7 @@ pub struct PyGreyModel {
 #[pymethods]
 impl PyGreyModel {
     #[staticmethod]
-    #[pyo3(signature = (x, y, *, windows = None, hidden = None, trainer = None, lr = None, momentum = None, max_epochs = None, goal = None, patience = None, init = None, seed = None))]
+    #[pyo3(signature = (x, y, *, windows = None, hidden = None, trainer = None, lr = None, momentum = None, max_epochs = None, goal = None, patience = None, init = None, seed = None, large_n = None))]
     #[allow(clippy::too_many_arguments)]
     fn fit(
         py: Python<'_>,
@@ -34,6 +34,7 @@ impl PyGreyModel {
         patience: Option<usize>,
         init: Option<f64>,
         seed: Option<u64>,
+        large_n: Option<usize>,
     ) -> PyResult<Self> {
         let trainer = parse(trainer)?;
         let params = GreyBpParams::new()
@@ -43,6 +44,8 @@ impl PyGreyModel {
                 net(
                     p, hidden, trainer, lr, momentum, max_epochs, goal, patience, init, seed,
                 )
+                // 0: never (Python's large_n=None)
+                .given(large_n, |p, l| p.large_n((l > 0).then_some(l)))
             });
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
         let inner = crate::detach(py, || params.check()?.fit(xs, ys))?;

@@ -16,7 +16,7 @@ pub struct PyHybridModel {
 #[pymethods]
 impl PyHybridModel {
     #[staticmethod]
-    #[pyo3(signature = (x, y, *, starts = Vec::new(), variant = None, ma_lags = None, ar_lags = None, c_y = None, limit = None, hidden = None, trainer = None, lr = None, momentum = None, max_epochs = None, goal = None, patience = None, init = None, seed = None))]
+    #[pyo3(signature = (x, y, *, starts = Vec::new(), variant = None, ma_lags = None, ar_lags = None, c_y = None, limit = None, hidden = None, trainer = None, lr = None, momentum = None, max_epochs = None, goal = None, patience = None, init = None, seed = None, large_n = None))]
     #[allow(clippy::too_many_arguments)]
     fn fit(
         py: Python<'_>,
@@ -37,6 +37,7 @@ impl PyHybridModel {
         patience: Option<usize>,
         init: Option<f64>,
         seed: Option<u64>,
+        large_n: Option<usize>,
     ) -> PyResult<Self> {
         let trainer = parse(trainer)?;
         let params = HybridParams::new()
@@ -50,6 +51,8 @@ impl PyHybridModel {
                 net(
                     p, hidden, trainer, lr, momentum, max_epochs, goal, patience, init, seed,
                 )
+                // 0: never (Python's large_n=None)
+                .given(large_n, |p, l| p.large_n((l > 0).then_some(l)))
             });
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
         let inner = crate::detach(py, || params.check()?.fit(xs, ys, &starts))?;
