@@ -31,7 +31,7 @@
 
 use serde::Serialize;
 
-use super::calibrate::{calibrate, CalibrationOptions};
+use super::calibrate::{calibrate, noise_level, CalibrationOptions};
 use super::machine::{Ambient, DriftSpec, LinkSpec, Machine, NodeSpec, SourceSpec};
 use super::sim::{simulate, Init, RunView};
 use crate::error::{Error, Result};
@@ -39,6 +39,11 @@ use crate::fcm::FcmParams;
 use crate::linalg::lstsq;
 use crate::run::Run;
 use crate::samples::Samples;
+
+/// A temperature whose residual after a two-time-constant fit exceeds this many noise levels
+/// is left out of the network (machine sensors measured ≤ 6, the synthetic cabinet and hydraulic
+/// unit ≥ 15).
+pub const SCREEN_RATIO: f64 = 10.0;
 
 /// Options of [`identify`].
 #[derive(Clone, Debug)]
@@ -120,6 +125,8 @@ pub struct Identification {
     pub axes: Vec<AxisFit>,
     pub train_rows: usize,
     pub holdout_rows: usize,
+    /// Temperatures left out of the network by the screening, each with its reason.
+    pub spare: Vec<String>,
     pub notes: Vec<String>,
     pub calibration_iterations: usize,
     pub calibration_converged: bool,
@@ -454,6 +461,94 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         })
         .collect::<Result<_>>()?;
 
+    // inputs' normalised powers and their lags on a τ grid (60 s .. 24 h, at most twice the
+    // training span); the ambient's own lag term lag(T_amb, τ) − T_amb with them
+    let mut powers: Vec<(String, f64, Vec<f64>)> = Vec::new();
+    for u in &ck.inputs {
+        let col = view.col(u)?;
+        let top = col[..m].iter().fold(0.0_f64, |a, v| a.max(*v));
+        if top <= 0.0 {
+            notes.push(format!(
+                "{u} is never positive on the training rows: it drives no source"
+            ));
+            continue;
+        }
+        powers.push((
+            u.to_string(),
+            top,
+            col[..m].iter().map(|v| v.max(0.0) / top).collect(),
+        ));
+    }
+    if powers.is_empty() {
+        return Err(bad(
+            &file,
+            "U_* columns",
+            "no input is ever positive on the training rows: nothing would heat the network",
+        ));
+    }
+    let span = (t[m - 1] - t[0]).max(60.0);
+    let grid: Vec<f64> = (0..=30)
+        .map(|i| 60.0 * (86400.0_f64 / 60.0).powf(i as f64 / 30.0))
+        .filter(|&tau| tau <= 2.0 * span)
+        .collect();
+    let amb_m = &amb[..m];
+    let amb_shift: Vec<f64> = amb_m.iter().map(|a| a - amb_m[0]).collect();
+    let mut lagged: Vec<Vec<Vec<f64>>> = Vec::new(); // [tau][input..., ambient term]
+    for &tau in &grid {
+        let mut b: Vec<Vec<f64>> = powers.iter().map(|(_, _, p)| lowpass(t, p, tau)).collect();
+        let la = lowpass(t, &amb_shift, tau);
+        b.push(la.iter().zip(&amb_shift).map(|(l, a)| l - a).collect());
+        lagged.push(b);
+    }
+
+    // screening: a temperature that a two-time-constant response to the inputs and the room
+    // leaves with a residual above SCREEN_RATIO × its noise is not part of the heated structure
+    let mut kept = Vec::new();
+    let mut spare = Vec::new();
+    let coarse: Vec<usize> = (0..grid.len()).step_by(2).collect();
+    for (s, c) in sensors.iter().enumerate() {
+        let y = &rises[s];
+        let noise = noise_level(&view.col(c)?[..m]).max(0.01);
+        let mut best = f64::INFINITY;
+        for (a, &i) in coarse.iter().enumerate() {
+            for &j in &coarse[a + 1..] {
+                let mut basis: Vec<Vec<f64>> = lagged[i].clone();
+                basis.extend(lagged[j].iter().cloned());
+                basis.push(vec![1.0; m]);
+                let (_, ssr) = fit(&basis, y)?;
+                best = best.min((ssr / m as f64).sqrt());
+            }
+        }
+        if best > SCREEN_RATIO * noise {
+            spare.push(format!(
+                "{c}: a two-time-constant response to the inputs and the ambient leaves {best:.3} K RMS, {:.0}x its noise ({noise:.3} K): not driven like the structure, left out of the network (a spare column)",
+                best / noise
+            ));
+        } else {
+            kept.push(s);
+        }
+    }
+    if kept.is_empty() {
+        notes.push(
+            "every temperature failed the screening: all are kept as nodes all the same".into(),
+        );
+        kept = (0..sensors.len()).collect();
+        spare.clear();
+    }
+    let sensors: Vec<&str> = kept.iter().map(|&s| sensors[s]).collect();
+    let rises: Vec<Vec<f64>> = kept.iter().map(|&s| rises[s].clone()).collect();
+    let nodes_asked = match opts.nodes {
+        Some(k) if k > sensors.len() => {
+            notes.push(format!(
+                "{k} nodes asked, but {} temperatures pass the screening: {} nodes",
+                sensors.len(),
+                sensors.len()
+            ));
+            Some(sensors.len())
+        }
+        other => other,
+    };
+
     // 2. clusters
     let ns = sensors.len();
     let stride = m.div_ceil(400).max(1);
@@ -463,7 +558,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         let scale = r.iter().fold(0.0_f64, |a, v| a.max(v.abs())).max(1e-9);
         feat.extend(r.iter().step_by(stride).map(|v| v / scale));
     }
-    let (labels, own, c, node_rule) = match opts.nodes {
+    let (labels, own, c, node_rule) = match nodes_asked {
         Some(k) if k == ns => (
             (0..ns).collect::<Vec<_>>(),
             vec![1.0; ns],
@@ -539,39 +634,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let reps: Vec<usize> = groups.iter().map(|g| g[0]).collect();
     let nn = reps.len();
 
-    // 3. first-order fits
-    let mut powers: Vec<(String, f64, Vec<f64>)> = Vec::new();
-    for u in &ck.inputs {
-        let col = view.col(u)?;
-        let top = col[..m].iter().fold(0.0_f64, |a, v| a.max(*v));
-        if top <= 0.0 {
-            notes.push(format!(
-                "{u} is never positive on the training rows: it drives no source"
-            ));
-            continue;
-        }
-        powers.push((
-            u.to_string(),
-            top,
-            col[..m].iter().map(|v| v.max(0.0) / top).collect(),
-        ));
-    }
-    if powers.is_empty() {
-        return Err(bad(
-            &file,
-            "U_* columns",
-            "no input is ever positive on the training rows: nothing would heat the network",
-        ));
-    }
-    let span = (t[m - 1] - t[0]).max(60.0);
-    let grid: Vec<f64> = (0..=30)
-        .map(|i| 60.0 * (86400.0_f64 / 60.0).powf(i as f64 / 30.0))
-        .filter(|&tau| tau <= 2.0 * span)
-        .collect();
-    let mut lagged: Vec<Vec<Vec<f64>>> = Vec::new(); // [tau][input] series
-    for &tau in &grid {
-        lagged.push(powers.iter().map(|(_, _, p)| lowpass(t, p, tau)).collect());
-    }
+    // 3. first-order fits (inputs and the ambient term, one τ)
     struct Fo {
         tau: f64,
         gains: Vec<f64>,
@@ -664,7 +727,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     // 6. values: G = 100 W / steady rise at full power, half to ambient, half to the link
     let g_tot: Vec<f64> = fos
         .iter()
-        .map(|f| 100.0 / f.gains.iter().sum::<f64>().abs().max(0.05))
+        .map(|f| 100.0 / f.gains[..powers.len()].iter().sum::<f64>().abs().max(0.05))
         .collect();
     let mut nodes = Vec::new();
     for i in 0..nn {
@@ -807,6 +870,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         axes,
         train_rows: m,
         holdout_rows: n - m,
+        spare,
         notes,
         calibration_iterations: cal.n_iter,
         calibration_converged: cal.converged,
@@ -866,6 +930,9 @@ fn commented_toml(id: &Identification) -> Result<String> {
         Ambient::Constant(v) => line(&format!("ambient = {}", num(*v))),
     }
     line("");
+    for sp in &id.spare {
+        line(&format!("# left out: {sp}"));
+    }
     line(&format!("# nodes: {}", id.node_rule));
     line("# a node's sensor is the member of its cluster with the largest membership;");
     line("# tau: first-order fit of its rise over the ambient to the inputs (fit), and C / (G_amb + links) calibrated");
