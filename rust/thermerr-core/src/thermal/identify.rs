@@ -17,10 +17,14 @@
 //!    log grid from 60 s to 24 h, the best least-squares fit kept.
 //! 4. **Sources.** An input heats the nodes whose initial slope k_u/τ is at least half the
 //!    largest one for that input (the nodes that respond first and strongest), its 100 W at
-//!    the input's maximum shared in proportion to those slopes.
-//! 5. **Links.** Nodes in response order (τ ascending); each node after the first is linked to
-//!    the faster node whose rise it follows best (largest Pearson r): a tree, chain or star as
-//!    the data say.
+//!    the input's maximum shared in proportion to those slopes. Before the clustering, a
+//!    temperature that a two-time-constant response to the inputs and the ambient leaves with a
+//!    residual above [`SCREEN_RATIO`] times its noise is left out of the network (a spare column:
+//!    an electrical cabinet or a chiller that does not follow the machine's heat).
+//! 5. **Links.** Each node's heat balance in integral form (equation error) with non-negative
+//!    coefficients: y_i(t) − y_i(0) = Σ_j a_ij ∫(y_j − y_i) + b_i ∫(T_amb − y_i) + Σ_u c_iu ∫p_u,
+//!    every column scaled to a largest magnitude of 1. The links are the maximum spanning tree of
+//!    w_ij = a_ij + a_ji, grown from the fastest node (a chain, a star or a tree as the data say).
 //! 6. **Values.** Temperatures alone fix no absolute scale (doubling every capacity,
 //!    conductance and power changes no temperature), so the convention is 100 W at the input's
 //!    maximum: a node's total conductance G = 100 W / (its steady rise at full power), half to
@@ -183,6 +187,103 @@ fn fit(basis: &[Vec<f64>], y: &[f64]) -> Result<(Vec<f64>, f64)> {
         })
         .sum();
     Ok((c, ssr))
+}
+
+/// Cumulative trapezoid integral.
+fn cumtrapz(t: &[f64], y: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; y.len()];
+    for i in 1..y.len() {
+        out[i] = out[i - 1] + 0.5 * (y[i] + y[i - 1]) * (t[i] - t[i - 1]);
+    }
+    out
+}
+
+/// Solves a small dense system by Gaussian elimination with partial pivoting (None: singular).
+fn solve_small(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+    let n = b.len();
+    for k in 0..n {
+        let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
+        if a[p][k].abs() < 1e-12 {
+            return None;
+        }
+        a.swap(k, p);
+        b.swap(k, p);
+        for i in k + 1..n {
+            let f = a[i][k] / a[k][k];
+            for j in k..n {
+                a[i][j] -= f * a[k][j];
+            }
+            b[i] -= f * b[k];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for k in (0..n).rev() {
+        let s: f64 = (k + 1..n).map(|j| a[k][j] * x[j]).sum();
+        x[k] = (b[k] - s) / a[k][k];
+    }
+    Some(x)
+}
+
+/// Non-negative least squares min ‖Σ x_j c_j − y‖, x ≥ 0 (Lawson–Hanson on the normal
+/// equations; the problems here have a dozen columns at most).
+fn nnls(cols: &[Vec<f64>], y: &[f64]) -> Vec<f64> {
+    let p = cols.len();
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let ata: Vec<Vec<f64>> = (0..p)
+        .map(|i| (0..p).map(|j| dot(&cols[i], &cols[j])).collect())
+        .collect();
+    let atb: Vec<f64> = (0..p).map(|i| dot(&cols[i], y)).collect();
+    let tol = 1e-10 * atb.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+    let mut x = vec![0.0; p];
+    let mut passive = vec![false; p];
+    let sub_solve = |passive: &[bool]| -> Option<Vec<f64>> {
+        let idx: Vec<usize> = (0..p).filter(|&i| passive[i]).collect();
+        let a: Vec<Vec<f64>> = idx
+            .iter()
+            .map(|&i| idx.iter().map(|&j| ata[i][j]).collect())
+            .collect();
+        let b: Vec<f64> = idx.iter().map(|&i| atb[i]).collect();
+        let z = solve_small(a, b)?;
+        let mut full = vec![0.0; p];
+        for (k, &i) in idx.iter().enumerate() {
+            full[i] = z[k];
+        }
+        Some(full)
+    };
+    for _ in 0..3 * p + 3 {
+        let grad: Vec<f64> = (0..p)
+            .map(|i| atb[i] - (0..p).map(|j| ata[i][j] * x[j]).sum::<f64>())
+            .collect();
+        let Some(j) = (0..p)
+            .filter(|&i| !passive[i] && grad[i] > tol)
+            .max_by(|&a, &b| grad[a].total_cmp(&grad[b]))
+        else {
+            break;
+        };
+        passive[j] = true;
+        for _ in 0..3 * p + 3 {
+            let Some(z) = sub_solve(&passive) else {
+                passive[j] = false;
+                return x;
+            };
+            if (0..p).all(|i| !passive[i] || z[i] > 0.0) {
+                x = z;
+                break;
+            }
+            let alpha = (0..p)
+                .filter(|&i| passive[i] && z[i] <= 0.0)
+                .map(|i| x[i] / (x[i] - z[i]))
+                .fold(f64::INFINITY, f64::min);
+            for i in 0..p {
+                x[i] += alpha * (z[i] - x[i]);
+                if passive[i] && x[i] <= 1e-14 {
+                    passive[i] = false;
+                    x[i] = 0.0;
+                }
+            }
+        }
+    }
+    x
 }
 
 /// 4 significant digits: the file is for people.
@@ -702,27 +803,72 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         ));
     }
 
-    // 5. links: response order, each to the faster node it follows best
+    // 5. links: the conduction each node's own heat balance asks for. Equation error in
+    // integral form, non-negative coefficients: y_i(t) − y_i(0) = Σ_j a_ij ∫(y_j − y_i)
+    // + b_i ∫(T_amb − y_i) + Σ_u c_iu ∫p_u, every column scaled to a largest magnitude of 1;
+    // w_ij = a_ij + a_ji, and the links are the maximum spanning tree of w (Prim, from the
+    // fastest node). Response order (τ) only says where the tree starts.
     let mut order: Vec<usize> = (0..nn).collect();
     order.sort_by(|&a, &b| fos[a].tau.total_cmp(&fos[b].tau).then(a.cmp(&b)));
+    let meas: Vec<&[f64]> = reps
+        .iter()
+        .map(|&r| view.col(sensors[r]).map(|c| &c[..m]))
+        .collect::<Result<_>>()?;
+    let mut w = vec![vec![0.0; nn]; nn];
+    for i in 0..nn {
+        let y: Vec<f64> = meas[i].iter().map(|v| v - meas[i][0]).collect();
+        let mut cols: Vec<Vec<f64>> = Vec::new();
+        let others: Vec<usize> = (0..nn).filter(|&j| j != i).collect();
+        for &j in &others {
+            let d: Vec<f64> = meas[j].iter().zip(meas[i]).map(|(a, b)| a - b).collect();
+            cols.push(cumtrapz(t, &d));
+        }
+        let d: Vec<f64> = amb_m.iter().zip(meas[i]).map(|(a, b)| a - b).collect();
+        cols.push(cumtrapz(t, &d));
+        for (_, _, p) in &powers {
+            cols.push(cumtrapz(t, p));
+        }
+        for c in cols.iter_mut() {
+            let sc = c.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+            if sc > 0.0 {
+                c.iter_mut().for_each(|v| *v /= sc);
+            }
+        }
+        let x = nnls(&cols, &y);
+        for (k, &j) in others.iter().enumerate() {
+            w[i][j] += x[k];
+            w[j][i] += x[k];
+        }
+    }
     let mut parent = vec![None; nn];
+    let mut in_tree = vec![false; nn];
+    in_tree[order[0]] = true;
     let mut link_notes = Vec::new();
-    for (p, &i) in order.iter().enumerate().skip(1) {
-        let (j, r) = order[..p]
-            .iter()
-            .map(|&j| (j, pearson(&rises[reps[i]], &rises[reps[j]])))
-            .fold((order[0], f64::MIN), |a, b| if b.1 > a.1 { b } else { a });
-        parent[i] = Some(j);
+    let mut tree_order = vec![order[0]];
+    for _ in 1..nn {
+        let mut best: Option<(f64, f64, usize, usize)> = None;
+        for i in (0..nn).filter(|&i| in_tree[i]) {
+            for j in (0..nn).filter(|&j| !in_tree[j]) {
+                let r = pearson(&rises[reps[i]], &rises[reps[j]]);
+                let key = (w[i][j], r);
+                if best.is_none_or(|b| key.0 > b.0 || (key.0 == b.0 && key.1 > b.1)) {
+                    best = Some((key.0, key.1, i, j));
+                }
+            }
+        }
+        let (wij, r, i, j) = best.expect("a node outside the tree");
+        in_tree[j] = true;
+        parent[j] = Some(i);
+        tree_order.push(j);
         link_notes.push(format!(
-            "{} - {}: {} (τ {}) follows {} (τ {}) best among the faster nodes, r = {r:.3}",
+            "{} - {}: conduction weight {wij:.3} in the two nodes' heat balances (equation error), the largest to a node outside the tree; rises r = {r:.3}; tau {} and {}",
+            names[i],
             names[j],
-            names[i],
-            names[i],
             fmt_s(fos[i].tau),
-            names[j],
             fmt_s(fos[j].tau)
         ));
     }
+    let order = tree_order;
 
     // 6. values: G = 100 W / steady rise at full power, half to ambient, half to the link
     let g_tot: Vec<f64> = fos
@@ -963,7 +1109,7 @@ fn commented_toml(id: &Identification) -> Result<String> {
     }
     if !m.links.is_empty() {
         line("");
-        line("# links: nodes in response order (tau ascending), each to the faster node it follows best");
+        line("# links: the maximum spanning tree of the conduction each node's heat balance asks for");
     }
     for (l, why) in m.links.iter().zip(&id.links) {
         line("");
