@@ -14,9 +14,9 @@
 //!    unmodelled sources).
 //! 3. **Time constants.** Each node's rise over the ambient is fitted as a first-order response
 //!    to the inputs' normalised powers p = max(u, 0)/max(u) and the room:
-//!    rise ≈ Σ_u (k_u · lag(p_u, τ) + k'_u · lag(p_u², τ)) + k_a · (lag(T_amb, τ) − T_amb), τ on a
-//!    log grid from 60 s to 24 h, the best least-squares fit kept (p and p² stand for a source
-//!    exponent between 1 and 2).
+//!    rise ≈ Σ_u k_u · lag(p_u, τ) + k_a · (lag(T_amb, τ) − T_amb), τ on a log grid from 60 s to
+//!    24 h, the best least-squares fit kept. (The screening's two-time-constant fit adds
+//!    lag(p_u², τ): a source exponent between 1 and 2.)
 //! 4. **Sources.** An input heats the nodes whose initial slope k_u/τ is at least half the
 //!    largest one for that input (the nodes that respond first and strongest), its 100 W at
 //!    the input's maximum shared in proportion to those slopes. Before the clustering, a
@@ -211,12 +211,14 @@ fn solve_small(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
         }
         a.swap(k, p);
         b.swap(k, p);
-        for i in k + 1..n {
-            let f = a[i][k] / a[k][k];
-            for j in k..n {
-                a[i][j] -= f * a[k][j];
+        let (top, rest) = a.split_at_mut(k + 1);
+        let pivot = &top[k];
+        for (off, row) in rest.iter_mut().enumerate() {
+            let f = row[k] / pivot[k];
+            for (x, p) in row[k..n].iter_mut().zip(&pivot[k..n]) {
+                *x -= f * p;
             }
-            b[i] -= f * b[k];
+            b[k + 1 + off] -= f * b[k];
         }
     }
     let mut x = vec![0.0; n];
@@ -464,8 +466,9 @@ fn choose_ambient(
     let cols: Vec<&[f64]> = temps.iter().map(|c| view.col(c)).collect::<Result<_>>()?;
     let mut coldest = vec![0usize; temps.len()];
     for i in 0..rows {
+        let at = |k: usize| cols[k][i];
         let k = (0..temps.len())
-            .min_by(|&a, &b| cols[a][i].total_cmp(&cols[b][i]))
+            .min_by(|&a, &b| at(a).total_cmp(&at(b)))
             .unwrap_or(0);
         coldest[k] += 1;
     }
@@ -607,17 +610,19 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let amb_m = &amb[..m];
     let amb_shift: Vec<f64> = amb_m.iter().map(|a| a - amb_m[0]).collect();
     let mut lagged: Vec<Vec<Vec<f64>>> = Vec::new(); // [tau][input..., ambient term]
+    let mut lagged_sq: Vec<Vec<Vec<f64>>> = Vec::new(); // the same and p² per input
     for &tau in &grid {
-        // p and p² per input: a source's power (u/ref)^exponent with an exponent of 1-2
-        let mut b: Vec<Vec<f64>> = Vec::new();
-        for (_, _, p) in &powers {
-            b.push(lowpass(t, p, tau));
-            let p2: Vec<f64> = p.iter().map(|v| v * v).collect();
-            b.push(lowpass(t, &p2, tau));
-        }
+        let mut b: Vec<Vec<f64>> = powers.iter().map(|(_, _, p)| lowpass(t, p, tau)).collect();
         let la = lowpass(t, &amb_shift, tau);
         b.push(la.iter().zip(&amb_shift).map(|(l, a)| l - a).collect());
+        // the screening adds p² per input: a source's power (u/ref)^exponent, exponent 1-2
+        let mut sq = b.clone();
+        for (_, _, p) in &powers {
+            let p2: Vec<f64> = p.iter().map(|v| v * v).collect();
+            sq.push(lowpass(t, &p2, tau));
+        }
         lagged.push(b);
+        lagged_sq.push(sq);
     }
 
     // screening: a temperature that a two-time-constant response to the inputs and the room
@@ -631,8 +636,8 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         let mut best = f64::INFINITY;
         for (a, &i) in coarse.iter().enumerate() {
             for &j in &coarse[a + 1..] {
-                let mut basis: Vec<Vec<f64>> = lagged[i].clone();
-                basis.extend(lagged[j].iter().cloned());
+                let mut basis: Vec<Vec<f64>> = lagged_sq[i].clone();
+                basis.extend(lagged_sq[j].iter().cloned());
                 basis.push(vec![1.0; m]);
                 let (_, ssr) = fit(&basis, y)?;
                 best = best.min((ssr / m as f64).sqrt());
@@ -787,11 +792,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let mut source_notes = Vec::new();
     let mut heated_by = vec![Vec::new(); nn];
     for (ui, (u, top, _)) in powers.iter().enumerate() {
-        // rise at full input (p = 1): the p and p² gains together
-        let slope: Vec<f64> = fos
-            .iter()
-            .map(|f| (f.gains[2 * ui] + f.gains[2 * ui + 1]) / f.tau)
-            .collect();
+        let slope: Vec<f64> = fos.iter().map(|f| f.gains[ui] / f.tau).collect();
         let smax = slope.iter().fold(0.0_f64, |a, v| a.max(*v));
         if smax <= 0.0 {
             notes.push(format!("no node warms with {u}: it drives no source"));
@@ -895,14 +896,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     // 6. values: G = 100 W / steady rise at full power, half to ambient, half to the link
     let g_tot: Vec<f64> = fos
         .iter()
-        .map(|f| {
-            100.0
-                / f.gains[..2 * powers.len()]
-                    .iter()
-                    .sum::<f64>()
-                    .abs()
-                    .max(0.05)
-        })
+        .map(|f| 100.0 / f.gains[..powers.len()].iter().sum::<f64>().abs().max(0.05))
         .collect();
     let mut nodes = Vec::new();
     for i in 0..nn {
