@@ -465,13 +465,13 @@ fn choose_ambient(
     let view = RunView::new(run);
     let cols: Vec<&[f64]> = temps.iter().map(|c| view.col(c)).collect::<Result<_>>()?;
     let mut coldest = vec![0usize; temps.len()];
-    for i in 0..rows {
+    (0..rows).for_each(|i| {
         let at = |k: usize| cols[k][i];
         let k = (0..temps.len())
             .min_by(|&a, &b| at(a).total_cmp(&at(b)))
             .unwrap_or(0);
         coldest[k] += 1;
-    }
+    });
     let mut order: Vec<usize> = (0..temps.len()).collect();
     order.sort_by(|&a, &b| coldest[b].cmp(&coldest[a]).then(a.cmp(&b)));
     let (best, second) = (order[0], order[1]);
