@@ -127,6 +127,20 @@ class MachineModel:
     def load(path: str) -> MachineModel: ...
     @staticmethod
     def from_toml(text: str, file: str = "<string>") -> MachineModel: ...
+    @staticmethod
+    def identify(
+        source: str,
+        time: _F64,
+        names: list[str],
+        data: _F64,
+        *,
+        axes: list[str] | None = None,
+        nodes: int | None = None,
+        ambient: str | None = None,
+        train_fraction: float = 0.7,
+        seed: int = 0,
+        max_iter: int = 100,
+    ) -> tuple[MachineModel, str]: ...
     def to_toml(self) -> str: ...
     @property
     def name(self) -> str: ...

@@ -4,6 +4,7 @@
     thermerr evaluate MODEL.json RUN.csv
     thermerr select-sensors RUN.csv --axis E_z
     thermerr predict RUN.csv --machine M.toml --out PRED.csv
+    thermerr init RUN.csv --axis E_z [--axis E_y] --out M.toml [--nodes N] [--ambient COL]
     thermerr calibrate RUN.csv --machine M.toml --out CAL.toml
     thermerr diagnose RUN.csv --machine M.toml --out DIR [--holdout TEST.csv]
     thermerr stiffness MODEL.json RUN.csv [--at SECONDS] [--eta 0.5]
@@ -320,6 +321,33 @@ def cmd_predict(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_init(args: argparse.Namespace) -> int:
+    from ._io import write_atomic
+    from .thermal import Machine
+
+    _check_out(args.out, args.run)
+    run = _read(args, args.run)
+    _stage(args, f"identifying a thermal network from {run.source} ...")
+    _, s = Machine.identify(run, args.axis, nodes=args.nodes, ambient=args.ambient, seed=args.seed)
+    write_atomic(args.out, s["toml"])
+    if args.json:
+        _print_json({k: v for k, v in s.items() if k != "toml"} | {"out": args.out})
+        return 0
+    amb = s["ambient"]
+    _say(args, f"ambient: {amb['column']} ({amb['reason']})")
+    _say(args, f"nodes: {s['node_rule']}")
+    for nd in s["nodes"]:
+        others = f"; also in its cluster: {', '.join(nd['members'][1:])}" if len(nd["members"]) > 1 else ""
+        heat = f"; heated by {', '.join(nd['heated_by'])}" if nd["heated_by"] else ""
+        _say(args, f"  {nd['name']:<20} sensor {nd['sensor']}, time constant {nd['tau_s']:.0f} s "
+                   f"(first-order fit {nd['tau_fit_s']:.0f} s){heat}{others}")
+    for a in s["axes"]:
+        _say(args, f"{a['axis']}: training RMS {a['train_rmse_um']:.3f} µm, "
+                   f"held-out RMS {a['holdout_rmse_um']:.3f} µm (last {s['holdout_rows']} rows)")
+    _say(args, f"wrote {args.out}")
+    return 0
+
+
 def cmd_calibrate(args: argparse.Namespace) -> int:
     from .thermal import Machine
 
@@ -539,6 +567,18 @@ def build_parser() -> argparse.ArgumentParser:
                     help="estimate the sensed nodes' start from the first N readings (default: first reading)")
     common(pr)
     pr.set_defaults(func=cmd_predict)
+
+    ini = sub.add_parser("init", help="identify a starting machine model (thermal network TOML) from a run")
+    ini.add_argument("run", help="measured run CSV (time_s, U_* inputs, T_* temperatures, E_* axes)")
+    ini.add_argument("--axis", action="append", default=None,
+                     help="error axis to map, repeatable (default: every E_* column)")
+    ini.add_argument("--out", required=True, help="machine TOML to write")
+    ini.add_argument("--nodes", type=_positive_int, default=None,
+                     help="number of nodes (default: the smallest Xie-Beni index over 2-5)")
+    ini.add_argument("--ambient", default=None, help="the ambient column (default: T_ambient, else the coldest)")
+    ini.add_argument("--seed", type=int, default=0, help="seed of the fuzzy c-means start (default 0)")
+    common(ini)
+    ini.set_defaults(func=cmd_init)
 
     ca = sub.add_parser("calibrate", help="fit a machine model's parameters to a run")
     ca.add_argument("run", help="measured run CSV")

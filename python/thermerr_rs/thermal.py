@@ -53,6 +53,28 @@ class Machine:
     def from_toml(cls, text: str, file: str = "<string>") -> Machine:
         return cls(_core.MachineModel.from_toml(text, file))
 
+    @classmethod
+    def identify(cls, run: Run, axes: str | list[str] | None = None, *, nodes: int | None = None,
+                 ambient: str | None = None, train_fraction: float = 0.7, seed: int = 0,
+                 max_iter: int = 100) -> tuple[Machine, dict[str, Any]]:
+        """Identify a starting network from a run alone (docs/machine-model.md, "Starting from
+        data"): pick the ambient, group the other sensors into nodes by fuzzy c-means, place the
+        sources, link the nodes by response order, set values from each node's time constant and
+        calibrate on the first ``train_fraction`` of the run.
+
+        ``axes``: the error columns to map (default every ``E_*`` column). Returns the machine
+        and a summary: ``ambient`` (``column``, ``rule``, ``reason``), ``nodes`` (each with
+        ``sensor``, ``members``, ``tau_fit_s``, ``tau_s``, ``heated_by``), ``axes`` (each with
+        ``train_rmse_um`` and ``holdout_rmse_um``), ``links``, ``sources``, ``node_rule`` and
+        ``toml``, the file with a comment on every choice (what ``thermerr init`` writes).
+        Bad input (no ``T_*`` column, no ``E_*`` axis, an unknown ``ambient``, more ``nodes``
+        than sensors) raises a :class:`~thermerr_rs.errors.DataError` naming the run and the entry.
+        """
+        ax = [axes] if isinstance(axes, str) else (list(axes) if axes is not None else None)
+        inner, summary = _core.MachineModel.identify(*_run_args(run), axes=ax, nodes=nodes, ambient=ambient,
+                                                     train_fraction=train_fraction, seed=seed, max_iter=max_iter)
+        return cls(inner), json.loads(summary)
+
     def to_toml(self) -> str:
         return self._inner.to_toml()
 

@@ -10,6 +10,7 @@ use thermerr_core::thermal::calibrate::{calibrate, CalibrationOptions};
 use thermerr_core::thermal::diagnose::{
     diagnose, diagnose_axes, Cause, DiagnoseOptions, Diagnosis, Verdict,
 };
+use thermerr_core::thermal::identify::{identify, IdentifyOptions};
 use thermerr_core::thermal::{simulate, Init, Machine, RunView};
 
 use crate::{slice1, vec_to_py, PyErrWrap};
@@ -158,6 +159,46 @@ impl PyMachine {
         }
         d.set_item("drift", e)?;
         Ok(d)
+    }
+
+    /// Identifies a starting network from a run (thermal::identify); returns the machine and
+    /// the summary as JSON text (its `toml` field is the commented file).
+    #[staticmethod]
+    #[pyo3(signature = (source, time, names, data, *, axes = None, nodes = None, ambient = None, train_fraction = 0.7, seed = 0, max_iter = 100))]
+    #[allow(clippy::too_many_arguments)]
+    fn identify<'py>(
+        py: Python<'py>,
+        source: &str,
+        time: PyReadonlyArray1<'py, f64>,
+        names: Vec<String>,
+        data: PyReadonlyArray2<'py, f64>,
+        axes: Option<Vec<String>>,
+        nodes: Option<usize>,
+        ambient: Option<String>,
+        train_fraction: f64,
+        seed: u64,
+        max_iter: usize,
+    ) -> PyResult<(PyMachine, String)> {
+        let run = core_run(source, &time, names, &data)?;
+        let opts = IdentifyOptions {
+            axes: axes.unwrap_or_default(),
+            nodes,
+            ambient,
+            train_fraction,
+            seed,
+            max_iter,
+            ..IdentifyOptions::default()
+        };
+        let id = crate::detach(py, || identify(&run, &opts))?;
+        let summary = serde_json::to_string(&id)
+            .map_err(|e| PyErrWrap(thermerr_core::Error::Format(e.to_string())))?;
+        Ok((
+            PyMachine {
+                inner: id.machine,
+                file: format!("{source} (identified)"),
+            },
+            summary,
+        ))
     }
 
     /// Calibrates on a run; returns (calibrated machine, info dict).

@@ -2,6 +2,7 @@
 
 pub mod calibrate;
 pub mod diagnose;
+pub mod identify;
 pub mod machine;
 pub mod sim;
 

@@ -1,0 +1,1190 @@
+//! A starting thermal network identified from one run, for a user who has no machine file
+//! (`thermerr init`, `Machine.identify`). Every choice is a stated rule on the data:
+//!
+//! 1. **Ambient.** The column given, else `T_ambient`, else the temperature that is the coldest
+//!    reading of the run in the most training samples: heat flows from the machine into the room,
+//!    so the room is the coldest place a run measures (a sensor that drifts downwards can fool
+//!    this; the reason names the share and the runner-up so a person can check).
+//! 2. **Nodes.** The other temperatures' rises over the ambient on the training rows, each
+//!    divided by its largest magnitude (a shape, not a size), are clustered by fuzzy c-means
+//!    (m = 2, fixed seed). The count is the one given, else the one of 2..=5 (at most the sensor
+//!    count) with the smallest Xie–Beni index; two sensors or fewer are a node each. A node
+//!    carries one sensor: the member with the largest membership of its cluster; the others are
+//!    listed in the file's comments and stay spare columns (the diagnosis tries them as
+//!    unmodelled sources).
+//! 3. **Time constants.** Each node's rise over the ambient is fitted as a first-order response
+//!    to the inputs' normalised powers p = max(u, 0)/max(u) and the room:
+//!    rise ≈ Σ_u k_u · lag(p_u, τ) + k_a · (lag(T_amb, τ) − T_amb), τ on a log grid from 60 s to
+//!    24 h, the best least-squares fit kept. (The screening's two-time-constant fit adds
+//!    lag(p_u², τ): a source exponent between 1 and 2.)
+//! 4. **Sources.** An input heats the nodes whose initial slope k_u/τ is at least half the
+//!    largest one for that input (the nodes that respond first and strongest), its 100 W at
+//!    the input's maximum shared in proportion to those slopes. Before the clustering, a
+//!    temperature that a two-time-constant response to the inputs and the ambient leaves with a
+//!    residual above [`SCREEN_RATIO`] times its noise is left out of the network (a spare column:
+//!    an electrical cabinet or a chiller that does not follow the machine's heat).
+//! 5. **Links.** Each node's heat balance in integral form (equation error) with non-negative
+//!    coefficients: y_i(t) − y_i(0) = Σ_j a_ij ∫(y_j − y_i) + b_i ∫(T_amb − y_i) + Σ_u c_iu ∫p_u,
+//!    every column scaled to a largest magnitude of 1. The links are the maximum spanning tree of
+//!    w_ij = a_ij + a_ji, grown from the fastest node (a chain, a star or a tree as the data say).
+//! 6. **Values.** Temperatures alone fix no absolute scale (doubling every capacity,
+//!    conductance and power changes no temperature), so the convention is 100 W at the input's
+//!    maximum: a node's total conductance G = 100 W / (its steady rise at full power), half to
+//!    the ambient and half to its link, C = τ·G; drift coefficients by least squares of the axis
+//!    on the nodes' measured rises. Then [`calibrate`] on the first 70 % with wide bounds
+//!    (a factor 10) and a wide prior (a factor 10 is one σ), since the start is a rough guess;
+//!    every further axis keeps the network and refits only its drift map.
+
+use serde::Serialize;
+
+use super::calibrate::{calibrate, noise_level, CalibrationOptions};
+use super::machine::{Ambient, DriftSpec, LinkSpec, Machine, NodeSpec, SourceSpec};
+use super::sim::{simulate, Init, RunView};
+use crate::error::{Error, Result};
+use crate::fcm::FcmParams;
+use crate::linalg::lstsq;
+use crate::run::Run;
+use crate::samples::Samples;
+
+/// A temperature whose residual after a two-time-constant fit exceeds this many noise levels
+/// is left out of the network. Measured on the synthetic machines (8-46 h runs, 15-120 s
+/// sampling, stepped and random duty): machine sensors at most 8 noise levels, the cabinet and
+/// the hydraulic unit at least 16.
+pub const SCREEN_RATIO: f64 = 12.0;
+
+/// Options of [`identify`].
+#[derive(Clone, Debug)]
+pub struct IdentifyOptions {
+    /// Error axes to map (empty: every `E_*` column of the run).
+    pub axes: Vec<String>,
+    /// Number of nodes (None: chosen by the Xie–Beni index over 2..=`max_nodes`).
+    pub nodes: Option<usize>,
+    /// The ambient column (None: `T_ambient`, else the coldest column).
+    pub ambient: Option<String>,
+    /// Share of the rows used for training; the rest is held out.
+    pub train_fraction: f64,
+    pub max_nodes: usize,
+    pub seed: u64,
+    pub max_iter: usize,
+}
+
+impl Default for IdentifyOptions {
+    fn default() -> Self {
+        IdentifyOptions {
+            axes: Vec::new(),
+            nodes: None,
+            ambient: None,
+            train_fraction: 0.7,
+            max_nodes: 5,
+            seed: 0,
+            max_iter: 100,
+        }
+    }
+}
+
+/// The ambient chosen and why.
+#[derive(Clone, Debug, Serialize)]
+pub struct AmbientChoice {
+    pub column: String,
+    pub rule: String,
+    pub reason: String,
+}
+
+/// One identified node.
+#[derive(Clone, Debug, Serialize)]
+pub struct NodeInfo {
+    pub name: String,
+    pub sensor: String,
+    /// Every sensor of its cluster, the representative first.
+    pub members: Vec<String>,
+    /// The representative's membership of its cluster.
+    pub membership: f64,
+    /// First-order fit of the rise over the ambient: τ (s) and R².
+    pub tau_fit_s: f64,
+    pub r2: f64,
+    /// τ of the calibrated node alone: C / (G_ambient + Σ links).
+    pub tau_s: f64,
+    pub heated_by: Vec<String>,
+}
+
+/// Training and held-out RMS of an axis.
+#[derive(Clone, Debug, Serialize)]
+pub struct AxisFit {
+    pub axis: String,
+    pub train_rmse_um: f64,
+    pub holdout_rmse_um: f64,
+}
+
+/// The identified machine and every choice made on the way.
+#[derive(Clone, Debug, Serialize)]
+pub struct Identification {
+    #[serde(skip)]
+    pub machine: Machine,
+    /// The machine as commented TOML (loads back to `machine`).
+    pub toml: String,
+    pub source: String,
+    pub ambient: AmbientChoice,
+    pub n_nodes: usize,
+    pub node_rule: String,
+    pub nodes: Vec<NodeInfo>,
+    pub links: Vec<String>,
+    pub sources: Vec<String>,
+    pub axes: Vec<AxisFit>,
+    pub train_rows: usize,
+    pub holdout_rows: usize,
+    /// Temperatures left out of the network by the screening, each with its reason.
+    pub spare: Vec<String>,
+    pub notes: Vec<String>,
+    pub calibration_iterations: usize,
+    pub calibration_converged: bool,
+}
+
+fn bad(file: &str, entry: impl Into<String>, reason: impl Into<String>) -> Error {
+    Error::Parse {
+        file: file.to_string(),
+        line: None,
+        row: None,
+        column: None,
+        reason: format!("{}: {}", entry.into(), reason.into()),
+    }
+}
+
+/// First-order lag with the inputs held over each step: y⁺ = a·y + (1 − a)·p, a = e^{−h/τ}.
+fn lowpass(t: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
+    let mut y = vec![0.0; p.len()];
+    for i in 1..p.len() {
+        let a = (-(t[i] - t[i - 1]) / tau).exp();
+        y[i] = a * y[i - 1] + (1.0 - a) * p[i - 1];
+    }
+    y
+}
+
+fn pearson(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len()) as f64;
+    if n < 2.0 {
+        return 0.0;
+    }
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b) {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma).powi(2);
+        sbb += (y - mb).powi(2);
+    }
+    if saa <= 0.0 || sbb <= 0.0 {
+        0.0
+    } else {
+        sab / (saa * sbb).sqrt()
+    }
+}
+
+/// Least squares without intercept; returns the coefficients and the residual sum of squares.
+fn fit(basis: &[Vec<f64>], y: &[f64]) -> Result<(Vec<f64>, f64)> {
+    let rows = y.len();
+    let a = faer::Mat::from_fn(rows, basis.len(), |i, j| basis[j][i]);
+    let c = lstsq(a.as_ref(), y)?;
+    let ssr = (0..rows)
+        .map(|i| {
+            let f: f64 = basis.iter().zip(&c).map(|(b, c)| b[i] * c).sum();
+            (y[i] - f).powi(2)
+        })
+        .sum();
+    Ok((c, ssr))
+}
+
+/// Cumulative trapezoid integral.
+fn cumtrapz(t: &[f64], y: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; y.len()];
+    for i in 1..y.len() {
+        out[i] = out[i - 1] + 0.5 * (y[i] + y[i - 1]) * (t[i] - t[i - 1]);
+    }
+    out
+}
+
+/// Solves a small dense system by Gaussian elimination with partial pivoting (None: singular).
+fn solve_small(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+    let n = b.len();
+    for k in 0..n {
+        let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
+        if a[p][k].abs() < 1e-12 {
+            return None;
+        }
+        a.swap(k, p);
+        b.swap(k, p);
+        let (top, rest) = a.split_at_mut(k + 1);
+        let pivot = &top[k];
+        for (off, row) in rest.iter_mut().enumerate() {
+            let f = row[k] / pivot[k];
+            for (x, p) in row[k..n].iter_mut().zip(&pivot[k..n]) {
+                *x -= f * p;
+            }
+            b[k + 1 + off] -= f * b[k];
+        }
+    }
+    let mut x = vec![0.0; n];
+    for k in (0..n).rev() {
+        let s: f64 = (k + 1..n).map(|j| a[k][j] * x[j]).sum();
+        x[k] = (b[k] - s) / a[k][k];
+    }
+    Some(x)
+}
+
+/// Non-negative least squares min ‖Σ x_j c_j − y‖, x ≥ 0 (Lawson–Hanson on the normal
+/// equations; the problems here have a dozen columns at most).
+fn nnls(cols: &[Vec<f64>], y: &[f64]) -> Vec<f64> {
+    let p = cols.len();
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let ata: Vec<Vec<f64>> = (0..p)
+        .map(|i| (0..p).map(|j| dot(&cols[i], &cols[j])).collect())
+        .collect();
+    let atb: Vec<f64> = (0..p).map(|i| dot(&cols[i], y)).collect();
+    let tol = 1e-10 * atb.iter().fold(1.0_f64, |a, v| a.max(v.abs()));
+    let mut x = vec![0.0; p];
+    let mut passive = vec![false; p];
+    let sub_solve = |passive: &[bool]| -> Option<Vec<f64>> {
+        let idx: Vec<usize> = (0..p).filter(|&i| passive[i]).collect();
+        let a: Vec<Vec<f64>> = idx
+            .iter()
+            .map(|&i| idx.iter().map(|&j| ata[i][j]).collect())
+            .collect();
+        let b: Vec<f64> = idx.iter().map(|&i| atb[i]).collect();
+        let z = solve_small(a, b)?;
+        let mut full = vec![0.0; p];
+        for (k, &i) in idx.iter().enumerate() {
+            full[i] = z[k];
+        }
+        Some(full)
+    };
+    for _ in 0..3 * p + 3 {
+        let grad: Vec<f64> = (0..p)
+            .map(|i| atb[i] - (0..p).map(|j| ata[i][j] * x[j]).sum::<f64>())
+            .collect();
+        let Some(j) = (0..p)
+            .filter(|&i| !passive[i] && grad[i] > tol)
+            .max_by(|&a, &b| grad[a].total_cmp(&grad[b]))
+        else {
+            break;
+        };
+        passive[j] = true;
+        for _ in 0..3 * p + 3 {
+            let Some(z) = sub_solve(&passive) else {
+                passive[j] = false;
+                return x;
+            };
+            if (0..p).all(|i| !passive[i] || z[i] > 0.0) {
+                x = z;
+                break;
+            }
+            let alpha = (0..p)
+                .filter(|&i| passive[i] && z[i] <= 0.0)
+                .map(|i| x[i] / (x[i] - z[i]))
+                .fold(f64::INFINITY, f64::min);
+            for i in 0..p {
+                x[i] += alpha * (z[i] - x[i]);
+                if passive[i] && x[i] <= 1e-14 {
+                    passive[i] = false;
+                    x[i] = 0.0;
+                }
+            }
+        }
+    }
+    x
+}
+
+/// 4 significant digits: the file is for people.
+fn sig4(v: f64) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        return v;
+    }
+    let e = v.abs().log10().floor() as i32;
+    let s = 10f64.powi(3 - e);
+    (v * s).round() / s
+}
+
+fn fmt_s(tau: f64) -> String {
+    if tau >= 3600.0 {
+        format!("{tau:.0} s ({:.1} h)", tau / 3600.0)
+    } else {
+        format!("{tau:.0} s ({:.0} min)", tau / 60.0)
+    }
+}
+
+fn rms(v: impl Iterator<Item = f64>) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for x in v {
+        s += x * x;
+        n += 1;
+    }
+    if n == 0 {
+        f64::NAN
+    } else {
+        (s / n as f64).sqrt()
+    }
+}
+
+struct Checked<'a> {
+    temps: Vec<&'a str>,
+    inputs: Vec<&'a str>,
+    axes: Vec<String>,
+}
+
+fn check_input<'a>(run: &'a Run, opts: &IdentifyOptions) -> Result<Checked<'a>> {
+    let file = run.source.as_str();
+    let with = |p: &str| -> Vec<&'a str> {
+        run.names
+            .iter()
+            .filter(|c| c.starts_with(p))
+            .map(String::as_str)
+            .collect()
+    };
+    let (temps, inputs, errs) = (with("T_"), with("U_"), with("E_"));
+    if temps.is_empty() {
+        return Err(bad(
+            file,
+            "T_* columns",
+            "the run has no temperature column to build nodes from",
+        ));
+    }
+    let axes = if opts.axes.is_empty() {
+        if errs.is_empty() {
+            return Err(bad(
+                file,
+                "E_* columns",
+                "the run has no error axis to map (an E_* column)",
+            ));
+        }
+        errs.iter().map(|s| s.to_string()).collect()
+    } else {
+        for a in &opts.axes {
+            if !a.starts_with("E_") || !errs.contains(&a.as_str()) {
+                return Err(bad(
+                    file,
+                    format!("axis `{a}`"),
+                    format!(
+                        "not an error column of the run (E_* columns: {})",
+                        if errs.is_empty() {
+                            "none".to_string()
+                        } else {
+                            errs.join(", ")
+                        }
+                    ),
+                ));
+            }
+        }
+        opts.axes.clone()
+    };
+    if let Some(a) = &opts.ambient {
+        if !temps.contains(&a.as_str()) {
+            return Err(bad(
+                file,
+                format!("ambient `{a}`"),
+                format!(
+                    "not a temperature column of the run (T_* columns: {})",
+                    temps.join(", ")
+                ),
+            ));
+        }
+    }
+    if temps.len() < 2 {
+        return Err(bad(
+            file,
+            "T_* columns",
+            format!(
+                "only {} : a network needs the ambient and at least one more temperature",
+                temps[0]
+            ),
+        ));
+    }
+    if let Some(k) = opts.nodes {
+        let sensors = temps.len() - 1;
+        if k == 0 || k > sensors {
+            return Err(bad(
+                file,
+                format!("nodes = {k}"),
+                format!(
+                    "must be between 1 and the {sensors} temperature sensors besides the ambient"
+                ),
+            ));
+        }
+    }
+    if inputs.is_empty() {
+        return Err(bad(
+            file,
+            "U_* columns",
+            "the run has no input column: nothing would heat the network",
+        ));
+    }
+    if run.time_s.len() < 20 {
+        return Err(bad(
+            file,
+            "rows",
+            format!(
+                "{} rows are too few to identify a network on",
+                run.time_s.len()
+            ),
+        ));
+    }
+    for (name, col) in run.names.iter().zip(&run.columns) {
+        if name.starts_with("T_") || name.starts_with("U_") || axes.contains(name) {
+            if let Some(i) = col.iter().position(|v| !v.is_finite()) {
+                return Err(bad(
+                    file,
+                    format!("column `{name}`"),
+                    format!("row {} is not a finite number", i + 1),
+                ));
+            }
+        }
+    }
+    Ok(Checked {
+        temps,
+        inputs,
+        axes,
+    })
+}
+
+fn choose_ambient(
+    run: &Run,
+    temps: &[&str],
+    rows: usize,
+    given: Option<&str>,
+) -> Result<AmbientChoice> {
+    if let Some(a) = given {
+        return Ok(AmbientChoice {
+            column: a.to_string(),
+            rule: "given".into(),
+            reason: format!("{a} was given as the ambient"),
+        });
+    }
+    if temps.contains(&"T_ambient") {
+        return Ok(AmbientChoice {
+            column: "T_ambient".into(),
+            rule: "named".into(),
+            reason: "the run has a column named T_ambient (the formats.md convention)".into(),
+        });
+    }
+    let view = RunView::new(run);
+    let cols: Vec<&[f64]> = temps.iter().map(|c| view.col(c)).collect::<Result<_>>()?;
+    let mut coldest = vec![0usize; temps.len()];
+    (0..rows).for_each(|i| {
+        let at = |k: usize| cols[k][i];
+        let k = (0..temps.len())
+            .min_by(|&a, &b| at(a).total_cmp(&at(b)))
+            .unwrap_or(0);
+        coldest[k] += 1;
+    });
+    let mut order: Vec<usize> = (0..temps.len()).collect();
+    order.sort_by(|&a, &b| coldest[b].cmp(&coldest[a]).then(a.cmp(&b)));
+    let (best, second) = (order[0], order[1]);
+    let pct = |k: usize| 100.0 * coldest[k] as f64 / rows as f64;
+    Ok(AmbientChoice {
+        column: temps[best].to_string(),
+        rule: "coldest".into(),
+        reason: format!(
+            "no T_ambient column: {} is the coldest reading in {:.0} % of the training samples \
+             (next {} with {:.0} %); heat flows from the machine into the room, so the room is \
+             the coldest place measured",
+            temps[best],
+            pct(best),
+            temps[second],
+            pct(second)
+        ),
+    })
+}
+
+/// Fuzzy c-means on the rows of `x` (n × d); returns labels, the membership of each object in
+/// its own cluster, and the Xie–Beni index.
+fn cluster(
+    x: &[f64],
+    n: usize,
+    d: usize,
+    c: usize,
+    seed: u64,
+) -> Result<(Vec<usize>, Vec<f64>, f64)> {
+    let model = FcmParams::new(c)
+        .seed(Some(seed))
+        .max_iter(500)
+        .tol(1e-7)
+        .check()?
+        .fit(Samples::new(x, n, d)?)?;
+    let u = &model.membership;
+    let v = &model.centers;
+    let mut labels = Vec::with_capacity(n);
+    let mut own = Vec::with_capacity(n);
+    let mut j = 0.0;
+    for k in 0..n {
+        let row = u.row(k);
+        let (best, ub) =
+            row.iter().enumerate().fold(
+                (0, f64::MIN),
+                |acc, (i, &w)| if w > acc.1 { (i, w) } else { acc },
+            );
+        labels.push(best);
+        own.push(ub);
+        for (i, &w) in row.iter().enumerate() {
+            let d2: f64 = x[k * d..(k + 1) * d]
+                .iter()
+                .zip(v.row(i))
+                .map(|(a, b)| (a - b).powi(2))
+                .sum();
+            j += w * w * d2;
+        }
+    }
+    let mut sep = f64::INFINITY;
+    for a in 0..c {
+        for b in a + 1..c {
+            let d2: f64 = v
+                .row(a)
+                .iter()
+                .zip(v.row(b))
+                .map(|(p, q)| (p - q).powi(2))
+                .sum();
+            sep = sep.min(d2);
+        }
+    }
+    Ok((labels, own, j / (n as f64 * sep.max(1e-300))))
+}
+
+/// Identifies a starting network from a run (module docs).
+pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
+    let file = run.source.clone();
+    let ck = check_input(run, opts)?;
+    let view = RunView::new(run);
+    let n = run.time_s.len();
+    let frac = opts.train_fraction.clamp(0.1, 1.0);
+    let m = ((n as f64 * frac).floor() as usize).clamp(10, n);
+    let t = &run.time_s[..m];
+    let mut notes = Vec::new();
+
+    // 1. ambient
+    let ambient = choose_ambient(run, &ck.temps, m, opts.ambient.as_deref())?;
+    let amb = view.col(&ambient.column)?;
+    let sensors: Vec<&str> = ck
+        .temps
+        .iter()
+        .copied()
+        .filter(|c| *c != ambient.column)
+        .collect();
+    let k0 = 5.min(m);
+    let start = |y: &[f64]| y[..k0].iter().sum::<f64>() / k0 as f64;
+    let a0 = start(amb);
+    // rise over the ambient, training rows
+    let rises: Vec<Vec<f64>> = sensors
+        .iter()
+        .map(|c| {
+            let y = view.col(c)?;
+            let y0 = start(y);
+            Ok((0..m).map(|i| (y[i] - amb[i]) - (y0 - a0)).collect())
+        })
+        .collect::<Result<_>>()?;
+
+    // inputs' normalised powers and their lags on a τ grid (60 s .. 24 h, at most twice the
+    // training span); the ambient's own lag term lag(T_amb, τ) − T_amb with them
+    let mut powers: Vec<(String, f64, Vec<f64>)> = Vec::new();
+    for u in &ck.inputs {
+        let col = view.col(u)?;
+        let top = col[..m].iter().fold(0.0_f64, |a, v| a.max(*v));
+        if top <= 0.0 {
+            notes.push(format!(
+                "{u} is never positive on the training rows: it drives no source"
+            ));
+            continue;
+        }
+        powers.push((
+            u.to_string(),
+            top,
+            col[..m].iter().map(|v| v.max(0.0) / top).collect(),
+        ));
+    }
+    if powers.is_empty() {
+        return Err(bad(
+            &file,
+            "U_* columns",
+            "no input is ever positive on the training rows: nothing would heat the network",
+        ));
+    }
+    let span = (t[m - 1] - t[0]).max(60.0);
+    let grid: Vec<f64> = (0..=30)
+        .map(|i| 60.0 * (86400.0_f64 / 60.0).powf(i as f64 / 30.0))
+        .filter(|&tau| tau <= 2.0 * span)
+        .collect();
+    let amb_m = &amb[..m];
+    let amb_shift: Vec<f64> = amb_m.iter().map(|a| a - amb_m[0]).collect();
+    let mut lagged: Vec<Vec<Vec<f64>>> = Vec::new(); // [tau][input..., ambient term]
+    let mut lagged_sq: Vec<Vec<Vec<f64>>> = Vec::new(); // the same and p² per input
+    for &tau in &grid {
+        let mut b: Vec<Vec<f64>> = powers.iter().map(|(_, _, p)| lowpass(t, p, tau)).collect();
+        let la = lowpass(t, &amb_shift, tau);
+        b.push(la.iter().zip(&amb_shift).map(|(l, a)| l - a).collect());
+        // the screening adds p² per input: a source's power (u/ref)^exponent, exponent 1-2
+        let mut sq = b.clone();
+        for (_, _, p) in &powers {
+            let p2: Vec<f64> = p.iter().map(|v| v * v).collect();
+            sq.push(lowpass(t, &p2, tau));
+        }
+        lagged.push(b);
+        lagged_sq.push(sq);
+    }
+
+    // screening: a temperature that a two-time-constant response to the inputs and the room
+    // leaves with a residual above SCREEN_RATIO × its noise is not part of the heated structure
+    let mut kept = Vec::new();
+    let mut spare = Vec::new();
+    let coarse: Vec<usize> = (0..grid.len()).step_by(2).collect();
+    for (s, c) in sensors.iter().enumerate() {
+        let y = &rises[s];
+        let noise = noise_level(&view.col(c)?[..m]).max(0.01);
+        let mut best = f64::INFINITY;
+        for (a, &i) in coarse.iter().enumerate() {
+            for &j in &coarse[a + 1..] {
+                let mut basis: Vec<Vec<f64>> = lagged_sq[i].clone();
+                basis.extend(lagged_sq[j].iter().cloned());
+                basis.push(vec![1.0; m]);
+                let (_, ssr) = fit(&basis, y)?;
+                best = best.min((ssr / m as f64).sqrt());
+            }
+        }
+        if best > SCREEN_RATIO * noise {
+            spare.push(format!(
+                "{c}: a two-time-constant response to the inputs and the ambient leaves {best:.3} K RMS, {:.0}x its noise ({noise:.3} K): not driven like the structure, left out of the network (a spare column)",
+                best / noise
+            ));
+        } else {
+            kept.push(s);
+        }
+    }
+    if kept.is_empty() {
+        notes.push(
+            "every temperature failed the screening: all are kept as nodes all the same".into(),
+        );
+        kept = (0..sensors.len()).collect();
+        spare.clear();
+    }
+    let sensors: Vec<&str> = kept.iter().map(|&s| sensors[s]).collect();
+    let rises: Vec<Vec<f64>> = kept.iter().map(|&s| rises[s].clone()).collect();
+    let nodes_asked = match opts.nodes {
+        Some(k) if k > sensors.len() => {
+            notes.push(format!(
+                "{k} nodes asked, but {} temperatures pass the screening: {} nodes",
+                sensors.len(),
+                sensors.len()
+            ));
+            Some(sensors.len())
+        }
+        other => other,
+    };
+
+    // 2. clusters
+    let ns = sensors.len();
+    let stride = m.div_ceil(400).max(1);
+    let d = m.div_ceil(stride);
+    let mut feat = Vec::with_capacity(ns * d);
+    for r in &rises {
+        let scale = r.iter().fold(0.0_f64, |a, v| a.max(v.abs())).max(1e-9);
+        feat.extend(r.iter().step_by(stride).map(|v| v / scale));
+    }
+    let (labels, own, c, node_rule) = match nodes_asked {
+        Some(k) if k == ns => (
+            (0..ns).collect::<Vec<_>>(),
+            vec![1.0; ns],
+            ns,
+            format!("{k} nodes as asked, one per sensor"),
+        ),
+        Some(1) => (
+            vec![0; ns],
+            vec![1.0; ns],
+            1,
+            "1 node as asked: every sensor in one cluster".to_string(),
+        ),
+        Some(k) => {
+            let (l, o, xb) = cluster(&feat, ns, d, k, opts.seed)?;
+            (
+                l,
+                o,
+                k,
+                format!("{k} nodes as asked; fuzzy c-means (m = 2) on the normalised rises over the ambient, Xie-Beni {xb:.3}"),
+            )
+        }
+        None if ns <= 2 => (
+            (0..ns).collect(),
+            vec![1.0; ns],
+            ns,
+            format!("{ns} sensor(s) besides the ambient: one node each"),
+        ),
+        None => {
+            let hi = opts.max_nodes.max(2).min(ns);
+            let mut best: Option<(f64, usize, Vec<usize>, Vec<f64>)> = None;
+            let mut tried = Vec::new();
+            for k in 2..=hi {
+                let (l, o, xb) = cluster(&feat, ns, d, k, opts.seed)?;
+                tried.push(format!("{k}: {xb:.3}"));
+                if best.as_ref().is_none_or(|b| xb < b.0) {
+                    best = Some((xb, k, l, o));
+                }
+            }
+            let (_, k, l, o) = best.expect("at least one count tried");
+            (
+                l,
+                o,
+                k,
+                format!(
+                    "{k} nodes: the smallest Xie-Beni index of fuzzy c-means (m = 2) on the normalised rises over the ambient, over 2..={hi} nodes ({})",
+                    tried.join(", ")
+                ),
+            )
+        }
+    };
+    // clusters in order of first member; representative = largest own membership
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    let mut seen: Vec<Option<usize>> = vec![None; c];
+    for (s, &l) in labels.iter().enumerate() {
+        match seen[l] {
+            Some(g) => groups[g].push(s),
+            None => {
+                seen[l] = Some(groups.len());
+                groups.push(vec![s]);
+            }
+        }
+    }
+    if groups.len() < c {
+        notes.push(format!(
+            "{} of the {c} clusters received no sensor as its best cluster: {} nodes",
+            c - groups.len(),
+            groups.len()
+        ));
+    }
+    for g in groups.iter_mut() {
+        g.sort_by(|&a, &b| own[b].total_cmp(&own[a]).then(a.cmp(&b)));
+    }
+    let reps: Vec<usize> = groups.iter().map(|g| g[0]).collect();
+    let nn = reps.len();
+
+    // 3. first-order fits (inputs and the ambient term, one τ)
+    struct Fo {
+        tau: f64,
+        gains: Vec<f64>,
+        r2: f64,
+    }
+    let mut fos = Vec::new();
+    for &r in &reps {
+        let y = &rises[r];
+        let ss: f64 = y.iter().map(|v| v * v).sum::<f64>().max(1e-12);
+        let mut best: Option<Fo> = None;
+        for (g, &tau) in grid.iter().enumerate() {
+            let (coef, ssr) = fit(&lagged[g], y)?;
+            let r2 = 1.0 - ssr / ss;
+            if best.as_ref().is_none_or(|b| r2 > b.r2) {
+                best = Some(Fo {
+                    tau,
+                    gains: coef,
+                    r2,
+                });
+            }
+        }
+        fos.push(best.expect("the τ grid is not empty"));
+    }
+
+    // 4. sources
+    let names: Vec<String> = reps
+        .iter()
+        .map(|&r| sensors[r].trim_start_matches("T_").to_string())
+        .collect();
+    let mut sources = Vec::new();
+    let mut source_notes = Vec::new();
+    let mut heated_by = vec![Vec::new(); nn];
+    for (ui, (u, top, _)) in powers.iter().enumerate() {
+        let slope: Vec<f64> = fos.iter().map(|f| f.gains[ui] / f.tau).collect();
+        let smax = slope.iter().fold(0.0_f64, |a, v| a.max(*v));
+        if smax <= 0.0 {
+            notes.push(format!("no node warms with {u}: it drives no source"));
+            continue;
+        }
+        let chosen: Vec<usize> = (0..nn).filter(|&i| slope[i] >= 0.5 * smax).collect();
+        let total: f64 = chosen.iter().map(|&i| slope[i]).sum();
+        for &i in &chosen {
+            let w = sig4(100.0 * slope[i] / total);
+            sources.push(SourceSpec {
+                node: names[i].clone(),
+                input: u.clone(),
+                w,
+                reference: sig4(*top),
+                exponent: 1.0,
+            });
+            heated_by[i].push(u.clone());
+            source_notes.push(format!(
+                "{u} on {}: initial slope {:.3} K/h at full input ({:.0} % of the largest)",
+                names[i],
+                slope[i] * 3600.0,
+                100.0 * slope[i] / smax
+            ));
+        }
+    }
+    if sources.is_empty() {
+        return Err(bad(
+            &file,
+            "U_* columns",
+            "no temperature warms with any input: there is no heat source to place",
+        ));
+    }
+
+    // 5. links: the conduction each node's own heat balance asks for. Equation error in
+    // integral form, non-negative coefficients: y_i(t) − y_i(0) = Σ_j a_ij ∫(y_j − y_i)
+    // + b_i ∫(T_amb − y_i) + Σ_u c_iu ∫p_u, every column scaled to a largest magnitude of 1;
+    // w_ij = a_ij + a_ji, and the links are the maximum spanning tree of w (Prim, from the
+    // fastest node). Response order (τ) only says where the tree starts.
+    let mut order: Vec<usize> = (0..nn).collect();
+    order.sort_by(|&a, &b| fos[a].tau.total_cmp(&fos[b].tau).then(a.cmp(&b)));
+    let meas: Vec<&[f64]> = reps
+        .iter()
+        .map(|&r| view.col(sensors[r]).map(|c| &c[..m]))
+        .collect::<Result<_>>()?;
+    let mut w = vec![vec![0.0; nn]; nn];
+    for i in 0..nn {
+        let y: Vec<f64> = meas[i].iter().map(|v| v - meas[i][0]).collect();
+        let mut cols: Vec<Vec<f64>> = Vec::new();
+        let others: Vec<usize> = (0..nn).filter(|&j| j != i).collect();
+        for &j in &others {
+            let d: Vec<f64> = meas[j].iter().zip(meas[i]).map(|(a, b)| a - b).collect();
+            cols.push(cumtrapz(t, &d));
+        }
+        let d: Vec<f64> = amb_m.iter().zip(meas[i]).map(|(a, b)| a - b).collect();
+        cols.push(cumtrapz(t, &d));
+        for (_, _, p) in &powers {
+            cols.push(cumtrapz(t, p));
+        }
+        for c in cols.iter_mut() {
+            let sc = c.iter().fold(0.0_f64, |a, v| a.max(v.abs()));
+            if sc > 0.0 {
+                c.iter_mut().for_each(|v| *v /= sc);
+            }
+        }
+        let x = nnls(&cols, &y);
+        for (k, &j) in others.iter().enumerate() {
+            w[i][j] += x[k];
+            w[j][i] += x[k];
+        }
+    }
+    let mut parent = vec![None; nn];
+    let mut in_tree = vec![false; nn];
+    in_tree[order[0]] = true;
+    let mut link_notes = Vec::new();
+    let mut tree_order = vec![order[0]];
+    for _ in 1..nn {
+        let mut best: Option<(f64, f64, usize, usize)> = None;
+        for i in (0..nn).filter(|&i| in_tree[i]) {
+            for j in (0..nn).filter(|&j| !in_tree[j]) {
+                let r = pearson(&rises[reps[i]], &rises[reps[j]]);
+                let key = (w[i][j], r);
+                if best.is_none_or(|b| key.0 > b.0 || (key.0 == b.0 && key.1 > b.1)) {
+                    best = Some((key.0, key.1, i, j));
+                }
+            }
+        }
+        let (wij, r, i, j) = best.expect("a node outside the tree");
+        in_tree[j] = true;
+        parent[j] = Some(i);
+        tree_order.push(j);
+        link_notes.push(format!(
+            "{} - {}: conduction weight {wij:.3} in the two nodes' heat balances (equation error), the largest to a node outside the tree; rises r = {r:.3}; tau {} and {}",
+            names[i],
+            names[j],
+            fmt_s(fos[i].tau),
+            fmt_s(fos[j].tau)
+        ));
+    }
+    let order = tree_order;
+
+    // 6. values: G = 100 W / steady rise at full power, half to ambient, half to the link
+    let g_tot: Vec<f64> = fos
+        .iter()
+        .map(|f| 100.0 / f.gains[..powers.len()].iter().sum::<f64>().abs().max(0.05))
+        .collect();
+    let mut nodes = Vec::new();
+    for i in 0..nn {
+        nodes.push(NodeSpec {
+            name: names[i].clone(),
+            capacity_j_per_k: sig4(fos[i].tau * g_tot[i]),
+            ambient_w_per_k: sig4(0.5 * g_tot[i]),
+            sensor: Some(sensors[reps[i]].to_string()),
+            boundary: None,
+            sensor_offset_k: 0.0,
+            sensor_drift_k_per_h: 0.0,
+        });
+    }
+    let mut links = Vec::new();
+    for &i in order.iter().skip(1) {
+        if let Some(j) = parent[i] {
+            links.push(LinkSpec {
+                between: [names[j].clone(), names[i].clone()],
+                w_per_k: sig4(0.5 * g_tot[i].min(g_tot[j])),
+            });
+        }
+    }
+    // drift: least squares of each axis on the nodes' measured rises
+    let node_rises: Vec<Vec<f64>> = reps
+        .iter()
+        .map(|&r| {
+            let y = view.col(sensors[r])?;
+            let y0 = y[0];
+            Ok(y[..m].iter().map(|v| v - y0).collect())
+        })
+        .collect::<Result<_>>()?;
+    let mut drift = Vec::new();
+    for ax in &ck.axes {
+        let e = view.col(ax)?;
+        let (coef, _) = fit(&node_rises, &e[..m])?;
+        drift.push(DriftSpec {
+            axis: ax.clone(),
+            um_per_k: names
+                .iter()
+                .cloned()
+                .zip(coef.iter().map(|v| sig4(*v)))
+                .collect(),
+            lag_s: None,
+            ambient_um_per_k: None,
+            quadratic_um_per_k2: Default::default(),
+            inputs: Vec::new(),
+            columns: Vec::new(),
+        });
+    }
+    let stem = std::path::Path::new(&file)
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| "run".into());
+    let start_machine = Machine {
+        name: format!("identified-{stem}"),
+        ambient: Ambient::Column(ambient.column.clone()),
+        nodes,
+        links,
+        sources,
+        drift,
+    };
+    start_machine.validate(&format!("{file} (identified start)"))?;
+
+    // 7. calibrate: first axis with the network, the others their drift map only
+    let mut cal_opts = CalibrationOptions {
+        axis: ck.axes[0].clone(),
+        bound_factor: 10.0,
+        prior_log_sigma: 10f64.ln(),
+        fit_rows: Some(m),
+        max_iter: opts.max_iter,
+        ..CalibrationOptions::default()
+    };
+    let cal = calibrate(&start_machine, &view, &cal_opts, None)?;
+    let mut machine = cal.machine.clone();
+    for ax in ck.axes.iter().skip(1) {
+        cal_opts.axis = ax.clone();
+        cal_opts.thermal = false;
+        cal_opts.fit_initial = false;
+        let c2 = calibrate(&machine, &view, &cal_opts, None)?;
+        machine = c2.machine;
+    }
+    // round for people, then judge the rounded machine
+    for nd in machine.nodes.iter_mut() {
+        nd.capacity_j_per_k = sig4(nd.capacity_j_per_k);
+        nd.ambient_w_per_k = sig4(nd.ambient_w_per_k);
+    }
+    for l in machine.links.iter_mut() {
+        l.w_per_k = sig4(l.w_per_k);
+    }
+    for s in machine.sources.iter_mut() {
+        s.w = sig4(s.w);
+        s.exponent = sig4(s.exponent);
+    }
+    for dr in machine.drift.iter_mut() {
+        for v in dr.um_per_k.values_mut() {
+            *v = sig4(*v);
+        }
+    }
+    let sim = simulate(&machine, &view, &Init::Offsets(cal.init.clone()))?;
+    let mut axes = Vec::new();
+    for (ax, pred) in &sim.drift {
+        let e = view.col(ax)?;
+        axes.push(AxisFit {
+            axis: ax.clone(),
+            train_rmse_um: rms((0..m).map(|i| pred[i] - e[i])),
+            holdout_rmse_um: rms((m..n).map(|i| pred[i] - e[i])),
+        });
+    }
+    let mut infos = Vec::new();
+    for i in 0..nn {
+        let nd = &machine.nodes[i];
+        let g: f64 = nd.ambient_w_per_k
+            + machine
+                .links
+                .iter()
+                .filter(|l| l.between.contains(&nd.name))
+                .map(|l| l.w_per_k)
+                .sum::<f64>();
+        infos.push(NodeInfo {
+            name: names[i].clone(),
+            sensor: sensors[reps[i]].to_string(),
+            members: groups[i].iter().map(|&s| sensors[s].to_string()).collect(),
+            membership: own[reps[i]],
+            tau_fit_s: fos[i].tau,
+            r2: fos[i].r2,
+            tau_s: nd.capacity_j_per_k / g.max(1e-12),
+            heated_by: heated_by[i].clone(),
+        });
+    }
+    let mut id = Identification {
+        machine,
+        toml: String::new(),
+        source: file.clone(),
+        ambient,
+        n_nodes: nn,
+        node_rule,
+        nodes: infos,
+        links: link_notes,
+        sources: source_notes,
+        axes,
+        train_rows: m,
+        holdout_rows: n - m,
+        spare,
+        notes,
+        calibration_iterations: cal.n_iter,
+        calibration_converged: cal.converged,
+    };
+    id.toml = commented_toml(&id)?;
+    // the text must load back to the very machine judged above
+    let back = Machine::from_toml(&id.toml, "identified machine")?;
+    if back != id.machine {
+        return Err(Error::Format(
+            "the commented TOML does not load back to the identified machine".into(),
+        ));
+    }
+    Ok(id)
+}
+
+fn q(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
+fn num(v: f64) -> String {
+    let s = format!("{v}");
+    if s.contains('.') || s.contains('e') || s.contains("inf") || s.contains("NaN") {
+        s
+    } else {
+        format!("{s}.0")
+    }
+}
+
+/// The machine as TOML a person can read and edit, every choice stated in `#` comments.
+fn commented_toml(id: &Identification) -> Result<String> {
+    let m = &id.machine;
+    let mut o = String::new();
+    let mut line = |s: &str| {
+        o.push_str(s);
+        o.push('\n');
+    };
+    line(&format!(
+        "# Identified by `thermerr init` from {} ({} training rows, the last {} held out).",
+        id.source, id.train_rows, id.holdout_rows
+    ));
+    line("# A starting point: every value below is calibrated on the training rows and may be edited.");
+    line("# Temperatures fix no absolute scale: sources are 100 W at the input's maximum before");
+    line("# calibration, so capacities and conductances are in that convention.");
+    for a in &id.axes {
+        line(&format!(
+            "# {}: training RMS {:.3} µm, held-out RMS {:.3} µm",
+            a.axis, a.train_rmse_um, a.holdout_rmse_um
+        ));
+    }
+    for note in &id.notes {
+        line(&format!("# note: {note}"));
+    }
+    line(&format!("name = {}", q(&m.name)));
+    line(&format!(
+        "# ambient ({}): {}",
+        id.ambient.rule, id.ambient.reason
+    ));
+    match &m.ambient {
+        Ambient::Column(c) => line(&format!("ambient = {}", q(c))),
+        Ambient::Constant(v) => line(&format!("ambient = {}", num(*v))),
+    }
+    line("");
+    for sp in &id.spare {
+        line(&format!("# left out: {sp}"));
+    }
+    line(&format!("# nodes: {}", id.node_rule));
+    line("# a node's sensor is the member of its cluster with the largest membership;");
+    line("# tau: first-order fit of its rise over the ambient to the inputs (fit), and C / (G_amb + links) calibrated");
+    for (nd, info) in m.nodes.iter().zip(&id.nodes) {
+        line("");
+        line(&format!(
+            "# {}: cluster {} (membership {:.2}); tau fit {} (R² {:.3}), calibrated {}",
+            nd.name,
+            info.members.join(", "),
+            info.membership,
+            fmt_s(info.tau_fit_s),
+            info.r2,
+            fmt_s(info.tau_s)
+        ));
+        if info.members.len() > 1 {
+            line(&format!(
+                "# other sensors of this cluster (not in the model): {}",
+                info.members[1..].join(", ")
+            ));
+        }
+        line("[[nodes]]");
+        line(&format!("name = {}", q(&nd.name)));
+        line(&format!("capacity_j_per_k = {}", num(nd.capacity_j_per_k)));
+        line(&format!("ambient_w_per_k = {}", num(nd.ambient_w_per_k)));
+        if let Some(s) = &nd.sensor {
+            line(&format!("sensor = {}", q(s)));
+        }
+    }
+    if !m.links.is_empty() {
+        line("");
+        line("# links: the maximum spanning tree of the conduction each node's heat balance asks for");
+    }
+    for (l, why) in m.links.iter().zip(&id.links) {
+        line("");
+        line(&format!("# {why}"));
+        line("[[links]]");
+        line(&format!(
+            "between = [{}, {}]",
+            q(&l.between[0]),
+            q(&l.between[1])
+        ));
+        line(&format!("w_per_k = {}", num(l.w_per_k)));
+    }
+    line("");
+    line("# sources: on the nodes whose initial slope is at least half the input's largest");
+    for (s, why) in m.sources.iter().zip(&id.sources) {
+        line("");
+        line(&format!("# {why}"));
+        line("[[sources]]");
+        line(&format!("node = {}", q(&s.node)));
+        line(&format!("input = {}", q(&s.input)));
+        line(&format!("w = {}", num(s.w)));
+        line(&format!("ref = {}", num(s.reference)));
+        line(&format!("exponent = {}", num(s.exponent)));
+    }
+    for d in &m.drift {
+        line("");
+        line(&format!(
+            "# drift of {}: µm per K of each node's rise, least squares then calibrated",
+            d.axis
+        ));
+        line("[[drift]]");
+        line(&format!("axis = {}", q(&d.axis)));
+        let parts: Vec<String> = d
+            .um_per_k
+            .iter()
+            .map(|(k, v)| format!("{} = {}", toml_key(k), num(*v)))
+            .collect();
+        line(&format!("um_per_k = {{ {} }}", parts.join(", ")));
+    }
+    Ok(o)
+}
+
+fn toml_key(k: &str) -> String {
+    if !k.is_empty()
+        && k.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    {
+        k.to_string()
+    } else {
+        q(k)
+    }
+}
