@@ -8,18 +8,32 @@ spindle heat input (levels redrawn every 30–120 min, idle spells included) —
 noise; one error axis (µm) that follows four hidden nodes with their own lags (so the sensors
 explain it only in part) with 0.3 µm probe noise. Train on the first 60 %, test on the rest;
 the held-out RMS (µm, on the last 40 %; the whole run is predicted so the lags carry over from the
-training part) is closed loop and one step ahead (the measured previous error in the lags), against predicting the training mean and against MLR on the same temperatures.
+training part) is closed loop and one step ahead (the measured previous error in the lags),
+against predicting the training mean and against MLR on the same temperatures.
 
     python benches/bench_sequence.py            # 10 000 rows
     python benches/bench_sequence.py --full     # also fit on all rows, scored on a second run
 
-Measured (this 2-core machine, shared; fit on the 6 000 training rows, and on all 10 000 with
-``--full``; RMS in µm on the last 4 000 rows): see the table at the end of this docstring and
-/work/seqfast-report.md.
+Measured on this 2-core machine, shared with other jobs (load average 4–9; wall time noisy),
+fit on the 6 000 training rows (and on all 10 000 with ``--full``), RMS in µm on the last 4 000:
 
-Before (main at 4afad9e):
-    HybridFilterNet  fit 6000 rows  44.9 s   (all 10 000 rows: 57.4 s)
-    GreyBP           fit 6000 rows  16.9 s   (all 10 000 rows: 30.6 s)
+Before (main at 4afad9e, full-batch training):
+    model              fit s  epochs  closed RMS  1-step RMS
+    train mean                             4.974
+    MLR                0.018               0.351
+    HybridFilterNet   89.550    4365       0.339       0.333    (all 10 000 rows: 142.1 s)
+    GreyBP            27.076    8000       4.973       4.974    (all 10 000 rows:  41.8 s)
+
+After (the large-n rule, docs/methods.md "Small networks"):
+    model              fit s   cpu s  pred s  epochs  closed RMS  1-step RMS
+    HybridFilterNet    1.036   0.667   0.027      93       0.339       0.334
+    HybridFilterNet all   1.053   0.691              56       3.980       3.425   (on run 2)
+    GreyBP             0.178   0.091   0.208      38       4.993       4.993
+    GreyBP all         0.331   0.191              41      13.168      13.172   (on run 2)
+    (run 2: train mean 12.265, MLR 4.651)
+
+GreyBP stays at the training mean with either trainer: some rolling GM(1,N) windows blow up on a
+run this long and the min–max scaled network inputs then carry almost nothing.
 """
 
 from __future__ import annotations
