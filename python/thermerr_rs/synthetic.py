@@ -524,17 +524,17 @@ def make_shop_case(
     for ch in SHOP_CHANNELS:
         k = {n: float(v * rng.uniform(0.5, 1.5)) for n, v in m["drift"][0]["um_per_k"].items()}
         e = sum(k[n] * (sim[n] - sim[n][0]) for n in k)
-        h = hidden.get(ch)
-        if h == "ambient_coupling":
+        effect = hidden.get(ch)
+        if effect == "ambient_coupling":
             params[f"{ch}.k_amb"] = kk = float(rng.choice([-1, 1]) * rng.uniform(2.0, 3.5))
             e = e + kk * (amb - amb[0])
-        elif h == "speed_growth":
+        elif effect == "speed_growth":
             params[f"{ch}.g"] = g = float(rng.choice([-1, 1]) * rng.uniform(3.0, 5.0))
             e = e + g * (rpm / 5000.0) ** 2 - g * (rpm[0] / 5000.0) ** 2
-        elif h == "thermal_lag":
+        elif effect == "thermal_lag":
             params[f"{ch}.tau"] = tau = float(rng.uniform(1200, 2400))
             e = lag(t, e, tau)
-        elif h == "nonlinear_expansion":
+        elif effect == "nonlinear_expansion":
             params[f"{ch}.q"] = q = float(np.sign(k["headstock"]) * rng.uniform(0.012, 0.02))
             e = e + q * (sim["headstock"] - sim["headstock"][0]) ** 2
         out[ch] = e + rng.normal(0, noise_um, len(t))
