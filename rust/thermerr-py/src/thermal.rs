@@ -258,22 +258,12 @@ impl PyMachine {
         time: PyReadonlyArray1<'py, f64>,
         names: Vec<String>,
         data: PyReadonlyArray2<'py, f64>,
-        holdout: Option<(
-            String,
-            PyReadonlyArray1<'py, f64>,
-            Vec<String>,
-            PyReadonlyArray2<'py, f64>,
-        )>,
+        holdout: PyHoldout<'py>,
         axis: Option<String>,
         holdout_fraction: f64,
         min_score: f64,
         noise_ratio: f64,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let run = core_run(source, &time, names, &data)?;
-        let hold = holdout
-            .as_ref()
-            .map(|(s, t, n, d)| core_run(s, t, n.clone(), d))
-            .transpose()?;
         let opts = DiagnoseOptions {
             axis,
             holdout_fraction,
@@ -281,16 +271,8 @@ impl PyMachine {
             noise_ratio,
             ..DiagnoseOptions::default()
         };
-        let diag = crate::detach(py, || {
-            let view = RunView::new(&run);
-            self.inner
-                .check_columns(&self.file, &run.source, |c| view.has(c))?;
-            let hview = hold.as_ref().map(RunView::new);
-            if let Some(h) = &hview {
-                self.inner
-                    .check_columns(&self.file, &h.source, |c| h.has(c))?;
-            }
-            diagnose(&self.inner, &view, hview.as_ref(), &opts)
+        let diag = self.on_runs(py, source, &time, names, &data, &holdout, |m, v, h| {
+            diagnose(m, v, h, &opts)
         })?;
         diagnosis_dict(py, &diag, &self.file)
     }
@@ -306,29 +288,56 @@ impl PyMachine {
         time: PyReadonlyArray1<'py, f64>,
         names: Vec<String>,
         data: PyReadonlyArray2<'py, f64>,
-        holdout: Option<(
-            String,
-            PyReadonlyArray1<'py, f64>,
-            Vec<String>,
-            PyReadonlyArray2<'py, f64>,
-        )>,
+        holdout: PyHoldout<'py>,
         axes: Vec<String>,
         holdout_fraction: f64,
         min_score: f64,
         noise_ratio: f64,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let run = core_run(source, &time, names, &data)?;
-        let hold = holdout
-            .as_ref()
-            .map(|(s, t, n, d)| core_run(s, t, n.clone(), d))
-            .transpose()?;
         let opts = DiagnoseOptions {
             holdout_fraction,
             min_score,
             noise_ratio,
             ..DiagnoseOptions::default()
         };
-        let diags = crate::detach(py, || {
+        let diags = self.on_runs(py, source, &time, names, &data, &holdout, |m, v, h| {
+            diagnose_axes(m, v, h, &axes, &opts)
+        })?;
+        diags
+            .iter()
+            .map(|d| diagnosis_dict(py, d, &self.file))
+            .collect()
+    }
+}
+
+/// A held-out run handed over from Python: source, time, names and data.
+type PyHoldout<'py> = Option<(
+    String,
+    PyReadonlyArray1<'py, f64>,
+    Vec<String>,
+    PyReadonlyArray2<'py, f64>,
+)>;
+
+impl PyMachine {
+    /// Converts the run (and the held-out run), checks their columns against the machine and
+    /// runs `f` on them with the GIL released (Ctrl-C honoured).
+    #[allow(clippy::too_many_arguments)]
+    fn on_runs<'py, T: Send>(
+        &self,
+        py: Python<'py>,
+        source: &str,
+        time: &PyReadonlyArray1<'py, f64>,
+        names: Vec<String>,
+        data: &PyReadonlyArray2<'py, f64>,
+        holdout: &PyHoldout<'py>,
+        f: impl FnOnce(&Machine, &RunView<'_>, Option<&RunView<'_>>) -> thermerr_core::Result<T> + Send,
+    ) -> PyResult<T> {
+        let run = core_run(source, time, names, data)?;
+        let hold = holdout
+            .as_ref()
+            .map(|(s, t, n, d)| core_run(s, t, n.clone(), d))
+            .transpose()?;
+        crate::detach(py, || {
             let view = RunView::new(&run);
             self.inner
                 .check_columns(&self.file, &run.source, |c| view.has(c))?;
@@ -337,12 +346,8 @@ impl PyMachine {
                 self.inner
                     .check_columns(&self.file, &h.source, |c| h.has(c))?;
             }
-            diagnose_axes(&self.inner, &view, hview.as_ref(), &axes, &opts)
-        })?;
-        diags
-            .iter()
-            .map(|d| diagnosis_dict(py, d, &self.file))
-            .collect()
+            f(&self.inner, &view, hview.as_ref())
+        })
     }
 }
 
