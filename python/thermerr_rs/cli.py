@@ -371,7 +371,7 @@ def _stage_times(report: dict[str, Any]) -> str:
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    from .thermal import Machine, diagnose, diagnose_axes
+    from .thermal import AxesDiagnosis, Diagnosis, Machine, diagnose, diagnose_axes
 
     for given in (args.run, args.machine, args.holdout):
         if given and os.path.realpath(os.path.dirname(os.path.abspath(given))) == os.path.realpath(args.out):
@@ -388,23 +388,18 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         _stage(args, f"diagnosed {len(axes)} axes in {time.perf_counter() - t0:.1f} s")
         for a in multi.axes:
             _stage(args, f"  {a}: " + _stage_times(multi[a].report))
-        page = multi.write(args.out)
-        if args.json:
-            _print_json(multi.report)
-        else:
-            print(multi)
-            print(f"report: {page}")
-        return 0
-    _stage(args, f"diagnosing {args.machine} on {run.source}: calibrating the baseline, screening every "
-                 "candidate extension ...")
-    t0 = time.perf_counter()
-    d = diagnose(run, machine, hold, axis=axes[0] if axes else None)
-    _stage(args, f"diagnosed in {time.perf_counter() - t0:.1f} s: " + _stage_times(d.report))
-    page = d.write(args.out)
-    if args.json:
-        _print_json(d.report)
+        result: Diagnosis | AxesDiagnosis = multi
     else:
-        print(d)
+        _stage(args, f"diagnosing {args.machine} on {run.source}: calibrating the baseline, screening "
+                     "every candidate extension ...")
+        t0 = time.perf_counter()
+        result = diagnose(run, machine, hold, axis=axes[0] if axes else None)
+        _stage(args, f"diagnosed in {time.perf_counter() - t0:.1f} s: " + _stage_times(result.report))
+    page = result.write(args.out)
+    if args.json:
+        _print_json(result.report)
+    else:
+        print(result)
         print(f"report: {page}")
     return 0
 

@@ -139,15 +139,7 @@ pub struct Identification {
     pub calibration_converged: bool,
 }
 
-fn bad(file: &str, entry: impl Into<String>, reason: impl Into<String>) -> Error {
-    Error::Parse {
-        file: file.to_string(),
-        line: None,
-        row: None,
-        column: None,
-        reason: format!("{}: {}", entry.into(), reason.into()),
-    }
-}
+use super::machine::bad;
 
 /// First-order lag with the inputs held over each step: y⁺ = a·y + (1 − a)·p, a = e^{−h/τ}.
 fn lowpass(t: &[f64], p: &[f64], tau: f64) -> Vec<f64> {

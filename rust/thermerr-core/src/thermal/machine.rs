@@ -136,7 +136,8 @@ fn two_names<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<[Str
     })
 }
 
-fn bad(file: &str, entry: impl Into<String>, reason: impl Into<String>) -> Error {
+/// An error in entry `entry` of file `file`.
+pub(crate) fn bad(file: &str, entry: impl Into<String>, reason: impl Into<String>) -> Error {
     Error::Parse {
         file: file.to_string(),
         line: None,
