@@ -38,7 +38,7 @@
 use serde::Serialize;
 
 use super::calibrate::{calibrate, noise_level, CalibrationOptions};
-use super::machine::{Ambient, DriftSpec, LinkSpec, Machine, NodeSpec, SourceSpec};
+use super::machine::{bad, Ambient, DriftSpec, LinkSpec, Machine, NodeSpec, SourceSpec};
 use super::sim::{simulate, Init, RunView};
 use crate::error::{Error, Result};
 use crate::fcm::FcmParams;
@@ -138,8 +138,6 @@ pub struct Identification {
     pub calibration_iterations: usize,
     pub calibration_converged: bool,
 }
-
-use super::machine::bad;
 
 /// First-order lag with the inputs held over each step: y⁺ = a·y + (1 − a)·p, a = e^{−h/τ}.
 fn lowpass(t: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
