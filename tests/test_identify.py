@@ -41,6 +41,7 @@ says little about the rate by itself; the sweep is the measurement.
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -234,3 +235,34 @@ def test_python_bad_input_is_a_thermerr_error():
         Machine.identify(run, nodes=8)
     with pytest.raises(ThermerrError, match="E_\\* columns"):
         Machine.identify(_run({k: v for k, v in c.train.items() if not k.startswith("E_")}, "bad.csv"))
+
+
+def test_the_report_says_the_network_was_identified(tmp_path):
+    """issue 15 point 5: `identified` and its summary in report.json, the network drawn in
+    report.html; a network written by hand reports `identified: false` and no summary."""
+    c = syn.make_case("vmc", "ambient_coupling", 1, hours=HOURS, dt=DT_S)
+    train, test = _run(c.train, "train.csv"), _run(c.test, "test.csv")
+    m, s = Machine.identify(train)
+    info = Machine.from_toml(s["toml"]).to_dict()["identified"]
+    assert info["source"] == "train.csv" and info["ambient_rule"] == "named"
+    assert info["train_rows"] == s["train_rows"] and info["holdout_rows"] == s["holdout_rows"]
+    assert set(info["holdout_rmse_um"]) == {"E_z"}
+    d = diagnose(train, m, test)
+    assert d.report["identified"] is True and d.report["identification"] == info
+    page = Path(d.write(tmp_path / "rep")).read_text()
+    assert "identified from data" in page and page.count("<svg") == 1
+    for n in m.nodes:
+        assert f">{n}</text>" in page, n
+    nominal = diagnose(train, Machine.from_toml(c.nominal_toml()), test)
+    assert nominal.report["identified"] is False and "identification" not in nominal.report
+    assert "identified from data" not in Path(nominal.write(tmp_path / "nom")).read_text()
+
+
+def test_an_unknown_key_in_the_identified_table_is_one_line():
+    c = syn.make_case("vmc", "none", 1, hours=HOURS, dt=DT_S)
+    _, s = Machine.identify(_run(c.train, "train.csv"))
+    text = s["toml"].replace("[identified]\n", "[identified]\nsurce = \"x\"\n")
+    with pytest.raises(ThermerrError) as e:
+        Machine.from_toml(text, "m.toml")
+    msg = str(e.value)
+    assert "m.toml" in msg and "surce" in msg and "\n" not in msg

@@ -105,7 +105,115 @@ def _plots(series: dict[str, Any], report: dict[str, Any]) -> list[tuple[str, st
     return out
 
 
-def render_html(report: dict[str, Any], series: dict[str, Any]) -> str:
+def _layers(network: dict[str, Any]) -> list[list[str]]:
+    """Nodes in columns by their link distance from the heated nodes (the sources' nodes, else
+    the first node), each column in file order; a node no link reaches goes last."""
+    names = [n["name"] for n in network["nodes"]]
+    nbrs: dict[str, list[str]] = {n: [] for n in names}
+    for link in network.get("links", []):
+        a, b = link["between"]
+        nbrs[a].append(b)
+        nbrs[b].append(a)
+    depth = {s["node"]: 0 for s in network.get("sources", [])} or {names[0]: 0}
+    frontier = list(depth)
+    while frontier:
+        nxt = []
+        for a in frontier:
+            for b in nbrs[a]:
+                if b not in depth:
+                    depth[b] = depth[a] + 1
+                    nxt.append(b)
+        frontier = nxt
+    last = max(depth.values()) + 1
+    cols: list[list[str]] = [[] for _ in range(last + 1)]
+    for n in names:
+        cols[depth.get(n, last)].append(n)
+    return [c for c in cols if c]
+
+
+def network_svg(network: dict[str, Any], causes: list[dict[str, Any]]) -> str:
+    """The thermal network as an SVG drawing: inputs (left) heating their nodes, the nodes in
+    columns by link distance from the heated ones, links, each node's sensor, the ambient (bottom)
+    with the nodes that lose heat to it, and the drift axes (right) with the nodes they read.
+    What the named causes added is written in green beside the part it changed."""
+    esc = html.escape
+    cols = _layers(network)
+    nodes = {n["name"]: n for n in network["nodes"]}
+    inputs = sorted({s["input"] for s in network.get("sources", [])})
+    drift = network.get("drift", [])
+    node_w, node_h, gap_x, gap_y, left, top = 160, 54, 90, 40, 170, 30
+    rows = max(len(c) for c in cols + [inputs, drift])
+    width = left + len(cols) * (node_w + gap_x) + 180
+    height = top + rows * (node_h + gap_y) + 60
+    pos: dict[str, tuple[float, float]] = {}
+    for i, col in enumerate(cols):
+        for j, n in enumerate(col):
+            pos[n] = (left + i * (node_w + gap_x), top + j * (node_h + gap_y))
+    amb_y, right = height - 40, width - 160
+    out = [f"<svg xmlns='http://www.w3.org/2000/svg' width='{width}' height='{height}' "
+           f"viewBox='0 0 {width} {height}' font-family='sans-serif' font-size='12'>",
+           "<defs><marker id='arr' markerWidth='8' markerHeight='8' refX='7' refY='4' orient='auto'>"
+           "<path d='M0,0 L8,4 L0,8 z' fill='#c44'/></marker></defs>"]
+    amb = network["ambient"]
+    amb_label = f"ambient: {amb}" if isinstance(amb, str) else f"ambient: {amb} °C"
+    out.append(f"<rect x='{left}' y='{amb_y}' width='{right - 40 - left}' height='24' fill='#e8f0f8' stroke='#89a'/>"
+               f"<text x='{left + 8}' y='{amb_y + 16}'>{esc(amb_label)}</text>")
+    for n, (x, y) in pos.items():  # losses to the ambient, under everything else
+        if nodes[n].get("ambient_w_per_k", 0.0) > 0:
+            out.append(f"<line x1='{x + node_w / 2}' y1='{y + node_h}' x2='{x + node_w / 2}' y2='{amb_y}' "
+                       "stroke='#89a' stroke-dasharray='3,3'/>")
+    for k, d in enumerate(drift):  # what each axis reads
+        y = top + k * (node_h + gap_y)
+        for n, v in d.get("um_per_k", {}).items():
+            if n in pos and v != 0:
+                x, yy = pos[n]
+                out.append(f"<line x1='{x + node_w}' y1='{yy + node_h / 2}' x2='{right}' y2='{y + node_h / 2}' "
+                           "stroke='#b90' stroke-opacity='0.6' stroke-dasharray='1,3'/>")
+    for link in network.get("links", []):
+        (x1, y1), (x2, y2) = pos[link["between"][0]], pos[link["between"][1]]
+        mx, my = (x1 + x2) / 2 + node_w / 2, (y1 + y2) / 2 + node_h / 2
+        out.append(f"<line x1='{x1 + node_w / 2}' y1='{y1 + node_h / 2}' x2='{x2 + node_w / 2}' y2='{y2 + node_h / 2}' "
+                   "stroke='#555' stroke-width='2'/>"
+                   f"<text x='{mx}' y='{my - 5}' fill='#555' font-size='10' text-anchor='middle'>{link['w_per_k']:.3g} W/K</text>")
+    for i, name in enumerate(inputs):
+        y = top + i * (node_h + gap_y)
+        out.append(f"<rect x='10' y='{y}' width='120' height='{node_h}' rx='4' fill='#fdecea' stroke='#c44'/>"
+                   f"<text x='16' y='{y + 31}'>{esc(name)}</text>")
+        for s in network["sources"]:
+            if s["input"] == name:
+                x2, y2 = pos[s["node"]]
+                out.append(f"<line x1='130' y1='{y + node_h / 2}' x2='{x2 - 2}' y2='{y2 + node_h / 2}' stroke='#c44' "
+                           "marker-end='url(#arr)'/>")
+    for n, (x, y) in pos.items():
+        nd = nodes[n]
+        fill = "#eef7ee" if nd.get("boundary") else "#fff"
+        out.append(f"<rect x='{x}' y='{y}' width='{node_w}' height='{node_h}' rx='6' fill='{fill}' stroke='#333'/>"
+                   f"<text x='{x + 8}' y='{y + 17}' font-weight='bold'>{esc(n)}</text>"
+                   f"<text x='{x + 8}' y='{y + 31}' font-size='10' fill='#555'>C {nd['capacity_j_per_k']:.3g} J/K</text>")
+        sensor = nd.get("sensor") or nd.get("boundary")
+        if sensor:
+            kind = "sensor" if nd.get("sensor") else "follows"
+            out.append(f"<circle cx='{x + 12}' cy='{y + 43}' r='4' fill='#48c'/>"
+                       f"<text x='{x + 20}' y='{y + 47}' font-size='10' fill='#48c'>{kind} {esc(sensor)}</text>")
+    for k, d in enumerate(drift):
+        y = top + k * (node_h + gap_y)
+        out.append(f"<rect x='{right}' y='{y}' width='120' height='{node_h}' rx='4' fill='#fff8e0' stroke='#b90'/>"
+                   f"<text x='{right + 8}' y='{y + 31}'>{esc(d['axis'])}</text>")
+    for c in causes:  # what the named causes added, beside the part they changed
+        text = c["cause"] + (f" ({c['column']})" if c.get("column") else "")
+        if c.get("node") in pos:
+            x, y = pos[c["node"]]
+            out.append(f"<text x='{x}' y='{y + node_h + 13}' font-size='10' fill='#2a7'>+ {esc(text)}</text>")
+        else:
+            k = next((i for i, d in enumerate(drift) if d["axis"] == c.get("axis")), 0)
+            extra = sum(1 for o in causes[:causes.index(c)] if o.get("node") not in pos and o.get("axis") == c.get("axis"))
+            y = top + k * (node_h + gap_y) + node_h + 13 + 12 * extra
+            out.append(f"<text x='{right}' y='{y}' font-size='10' fill='#2a7'>+ {esc(text)}</text>")
+    out.append("</svg>")
+    return "".join(out)
+
+
+def render_html(report: dict[str, Any], series: dict[str, Any], network: dict[str, Any] | None = None) -> str:
     """The HTML page: verdict and evidence first, then the figures, then the table."""
     esc = html.escape
     verdict = report["verdict"]
@@ -133,6 +241,18 @@ def render_html(report: dict[str, Any], series: dict[str, Any]) -> str:
         for title, png in plots
     )
     b, e = report["baseline"], report["extended"]
+    drawing = "" if network is None else (
+        "<h2>The network</h2><p>Inputs (red) heat their nodes; nodes are linked by conduction (grey, "
+        "W/K) and lose heat to the ambient (dashed); blue dots are the sensors, yellow boxes the drift "
+        "axes and the nodes they read. In green: what the named causes added.</p>"
+        f"<figure>{network_svg(network, report.get('causes', []))}</figure>")
+    ident_info = report.get("identification")
+    ident = "" if not report.get("identified") or not ident_info else (
+        f"<p>The network was <b>identified from data</b> by <code>thermerr init</code> from "
+        f"<code>{esc(str(ident_info['source']))}</code> ({ident_info['train_rows']} training rows, "
+        f"{ident_info['holdout_rows']} held out; ambient rule: {esc(str(ident_info['ambient_rule']))}; "
+        f"nodes: {esc(str(ident_info['node_rule']))}), not written by a person: a cause named here may "
+        "also be a shortcoming of the identified network.</p>")
     return f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>thermerr diagnosis: {esc(verdict)}</title>
 <style>body{{font-family:system-ui,sans-serif;max-width:980px;margin:2em auto;padding:0 1em;color:#222}}
@@ -149,6 +269,8 @@ figure{{margin:1.5em 0}} img{{max-width:100%}} figcaption{{color:#555;font-size:
 <h2>Rounds</h2>
 <table><tr><th>round</th><th>cause</th><th>column</th><th>held-out RMS before (µm)</th><th>held-out RMS after (µm)</th><th>gain (%)</th><th>of the excess (%)</th><th></th></tr>{round_rows}</table>
 {remainder}
+{ident}
+{drawing}
 {figs}
 <h2>Candidates (round 1)</h2>
 <table><tr><th>cause</th><th>column</th><th>gain (%)</th><th>score</th><th>ΔBIC (train)</th><th>parameters</th></tr>{rows}</table>
@@ -164,10 +286,12 @@ def write_report(
     series: dict[str, Any],
     calibrated_toml: str,
     extended_toml: str,
+    network: dict[str, Any] | None = None,
 ) -> Path:
     """Render everything, then write the four files into ``out_dir`` as one set (all or nothing;
-    a previous output there is replaced whole, see ``_io.write_set``)."""
-    page = render_html(report, series)
+    a previous output there is replaced whole, see ``_io.write_set``). ``network``: the extended
+    machine as :meth:`Machine.to_dict` gives it, drawn in the page."""
+    page = render_html(report, series, network)
     doc = json.dumps(report, indent=1, allow_nan=False)
     out = write_set(out_dir, {
         "calibrated.toml": calibrated_toml,
@@ -204,7 +328,7 @@ def render_axes_html(summary: dict[str, Any]) -> str:
 def write_axes_report(
     out_dir: str | os.PathLike[str],
     summary: dict[str, Any],
-    per_axis: dict[str, tuple[dict[str, Any], dict[str, Any], str, str]],
+    per_axis: dict[str, tuple[dict[str, Any], dict[str, Any], str, str, dict[str, Any] | None]],
 ) -> Path:
     """Write the summary and every axis's four files (``<axis>.report.json`` ...) into
     ``out_dir`` as one set (all or nothing, as :func:`write_report`)."""
@@ -212,9 +336,9 @@ def write_axes_report(
         "report.json": json.dumps(summary, indent=1, allow_nan=False),
         "report.html": render_axes_html(summary),
     }
-    for a, (report, series, cal, ext) in per_axis.items():
+    for a, (report, series, cal, ext, network) in per_axis.items():
         files[f"{a}.report.json"] = json.dumps(report, indent=1, allow_nan=False)
-        files[f"{a}.report.html"] = render_html(report, series)
+        files[f"{a}.report.html"] = render_html(report, series, network)
         files[f"{a}.calibrated.toml"] = cal
         files[f"{a}.extended.toml"] = ext
     out = write_set(out_dir, files)

@@ -78,6 +78,13 @@ class Machine:
     def to_toml(self) -> str:
         return self._inner.to_toml()
 
+    def to_dict(self) -> dict[str, Any]:
+        """The machine's fields as plain data, with the TOML's structure (docs/formats.md):
+        ``name``, ``ambient``, ``nodes``, ``links``, ``sources``, ``drift`` and, for a network
+        identified from data, ``identified``."""
+        out: dict[str, Any] = json.loads(self._inner.to_json())
+        return out
+
     def save(self, path: str | os.PathLike[str]) -> Path:
         return write_atomic(path, self.to_toml())
 
@@ -182,7 +189,8 @@ class Diagnosis:
         """Write report.json, calibrated.toml, extended.toml and report.html into ``out_dir``."""
         from .report import write_report
 
-        return write_report(out_dir, self.report, self.series, self.calibrated.to_toml(), self.extended.to_toml())
+        return write_report(out_dir, self.report, self.series, self.calibrated.to_toml(), self.extended.to_toml(),
+                            self.extended.to_dict())
 
     def __str__(self) -> str:
         b, e = self.report["baseline"], self.report["extended"]
@@ -252,6 +260,7 @@ class AxesDiagnosis:
             "baseline_rmse_um": {a: d.report["baseline"]["rmse_um"] for a, d in self.by_axis.items()},
             "extended_rmse_um": {a: d.report["extended"]["rmse_um"] for a, d in self.by_axis.items()},
             "reports": {a: f"{a}.report.json" for a in self.by_axis},
+            "identified": any(d.report["identified"] for d in self.by_axis.values()),
         }
 
     def write(self, out_dir: str | os.PathLike[str]) -> Path:
@@ -261,7 +270,8 @@ class AxesDiagnosis:
         from .report import write_axes_report
 
         return write_axes_report(out_dir, self.report, {
-            a: (d.report, d.series, d.calibrated.to_toml(), d.extended.to_toml()) for a, d in self.by_axis.items()
+            a: (d.report, d.series, d.calibrated.to_toml(), d.extended.to_toml(), d.extended.to_dict())
+            for a, d in self.by_axis.items()
         })
 
     def __str__(self) -> str:

@@ -78,6 +78,11 @@ impl PyMachine {
         Ok(self.inner.to_toml().map_err(PyErrWrap)?)
     }
 
+    /// The machine's fields as JSON text (the TOML's structure, formats.md).
+    fn to_json(&self) -> PyResult<String> {
+        Ok(self.inner.to_json().map_err(PyErrWrap)?)
+    }
+
     #[getter]
     fn name(&self) -> String {
         self.inner.name.clone()

@@ -38,7 +38,9 @@
 use serde::Serialize;
 
 use super::calibrate::{calibrate, noise_level, CalibrationOptions};
-use super::machine::{bad, Ambient, DriftSpec, LinkSpec, Machine, NodeSpec, SourceSpec};
+use super::machine::{
+    bad, Ambient, DriftSpec, Identified, LinkSpec, Machine, NodeSpec, SourceSpec,
+};
 use super::sim::{simulate, Init, RunView};
 use crate::error::{Error, Result};
 use crate::fcm::FcmParams;
@@ -947,6 +949,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         links,
         sources,
         drift,
+        identified: None,
     };
     start_machine.validate(&format!("{file} (identified start)"))?;
 
@@ -995,6 +998,21 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             holdout_rmse_um: rms((m..n).map(|i| pred[i] - e[i])),
         });
     }
+    machine.identified = Some(Identified {
+        source: file.clone(),
+        train_rows: m,
+        holdout_rows: n - m,
+        ambient_rule: ambient.rule.clone(),
+        node_rule: node_rule.clone(),
+        train_rmse_um: axes
+            .iter()
+            .map(|a| (a.axis.clone(), sig4(a.train_rmse_um)))
+            .collect(),
+        holdout_rmse_um: axes
+            .iter()
+            .map(|a| (a.axis.clone(), sig4(a.holdout_rmse_um)))
+            .collect(),
+    });
     let mut infos = Vec::new();
     for i in 0..nn {
         let nd = &machine.nodes[i];
@@ -1164,6 +1182,27 @@ fn commented_toml(id: &Identification) -> Result<String> {
             .map(|(k, v)| format!("{} = {}", toml_key(k), num(*v)))
             .collect();
         line(&format!("um_per_k = {{ {} }}", parts.join(", ")));
+    }
+    if let Some(p) = &m.identified {
+        line("");
+        line("# where this network came from; a diagnosis reports it (remove this table after");
+        line("# rewriting the network by hand)");
+        line("[identified]");
+        line(&format!("source = {}", q(&p.source)));
+        line(&format!("train_rows = {}", p.train_rows));
+        line(&format!("holdout_rows = {}", p.holdout_rows));
+        line(&format!("ambient_rule = {}", q(&p.ambient_rule)));
+        line(&format!("node_rule = {}", q(&p.node_rule)));
+        for (key, map) in [
+            ("train_rmse_um", &p.train_rmse_um),
+            ("holdout_rmse_um", &p.holdout_rmse_um),
+        ] {
+            let parts: Vec<String> = map
+                .iter()
+                .map(|(k, v)| format!("{} = {}", toml_key(k), num(*v)))
+                .collect();
+            line(&format!("{key} = {{ {} }}", parts.join(", ")));
+        }
     }
     Ok(o)
 }

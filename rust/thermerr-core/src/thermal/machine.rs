@@ -123,6 +123,29 @@ pub struct Machine {
     pub sources: Vec<SourceSpec>,
     #[serde(default)]
     pub drift: Vec<DriftSpec>,
+    /// Present when the network was identified from data by `thermerr init`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identified: Option<Identified>,
+}
+
+/// The `[identified]` table: where an identified network came from (`thermerr init`), kept in
+/// the file so that a diagnosis of it can say so (`report.json` `identified`). Remove the table
+/// after rewriting the network by hand.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Identified {
+    /// The run it was identified from, and its training and held-out rows.
+    pub source: String,
+    pub train_rows: usize,
+    pub holdout_rows: usize,
+    /// The ambient column's rule (`given`, `named`, `coldest`) and the node count's rule.
+    pub ambient_rule: String,
+    pub node_rule: String,
+    /// Each axis's training and held-out RMS (µm) right after identification.
+    #[serde(default)]
+    pub train_rmse_um: BTreeMap<String, f64>,
+    #[serde(default)]
+    pub holdout_rmse_um: BTreeMap<String, f64>,
 }
 
 /// `between` names exactly two nodes (a fixed-size array would silently drop a third).
@@ -183,6 +206,12 @@ impl Machine {
     pub fn to_toml(&self) -> Result<String> {
         toml::to_string(self)
             .map_err(|e| Error::Format(format!("cannot write the machine as TOML: {e}")))
+    }
+
+    /// The machine's fields as JSON text, with the TOML's structure.
+    pub fn to_json(&self) -> Result<String> {
+        serde_json::to_string(self)
+            .map_err(|e| Error::Format(format!("cannot write the machine as JSON: {e}")))
     }
 
     pub fn node_index(&self, name: &str) -> Option<usize> {

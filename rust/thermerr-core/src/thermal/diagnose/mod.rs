@@ -44,7 +44,7 @@ pub use rounds::{Accepted, Round, MAX_ROUNDS, MIN_SHARE_OF_EXCESS};
 pub use verdict::Verdict;
 
 use super::calibrate::{calibrate, evaluate, targets, Calibration, CalibrationOptions, FreeParam};
-use super::machine::Machine;
+use super::machine::{Identified, Machine};
 use super::sim::RunView;
 use crate::error::{Error, Result};
 use candidates::{Baseline, Spec};
@@ -202,6 +202,10 @@ pub struct Report<'a> {
     pub remainder_um: f64,
     pub rounds: &'a [Round],
     pub stage_s: &'a BTreeMap<&'static str, f64>,
+    /// Whether the machine's network was identified from data (`thermerr init`), and how.
+    pub identified: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub identification: Option<&'a Identified>,
 }
 
 impl Diagnosis {
@@ -244,6 +248,8 @@ impl Diagnosis {
             remainder_um: self.remainder_um,
             rounds: &self.rounds,
             stage_s: &self.stage_s,
+            identified: self.baseline.machine.identified.is_some(),
+            identification: self.baseline.machine.identified.as_ref(),
         }
     }
 }
