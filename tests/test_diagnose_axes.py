@@ -118,3 +118,44 @@ def test_a_fast_run_is_calibrated_on_every_kth_sample(shop):
     b, info_b = m.calibrate(tr.Run.from_frame(sub), "E_ch1", max_iter=15)
     assert a.to_toml() == b.to_toml()
     assert info_a["n_data"] == info_b["n_data"] == 600 * 5  # 4 sensors and the axis, 600 rows
+
+
+def test_the_progress_counts_every_calibration_of_every_axis():
+    """The bar's counts (issue 15 point 4): calls while the diagnosis runs, never more done than
+    planned, the plan growing as rounds start, the round reached; one count for all axes."""
+    c = syn.make_shop_case(2, hours=6.0, hidden={"E_ch1": "speed_growth"})
+    run = tr.Run.from_frame(c.train, source="shop")
+    seen = []
+    m = Machine.from_toml(c.nominal_toml())
+    d = m._inner.diagnose_axes(*tr.thermal._run_args(run), None, axes=["E_ch1", "E_ch2"],
+                               progress=lambda *a: seen.append(a))
+    assert len(d) == 2 and seen
+    assert all(done <= planned for done, planned, _ in seen)
+    assert [s[1] for s in seen] == sorted(s[1] for s in seen)  # the plan only grows
+    assert [s[0] for s in seen] == sorted(s[0] for s in seen)
+    assert seen[-1][1] >= 2 * 10  # two baselines and round 1's candidates of two axes at least
+    assert all(stage >= 1 for _, planned, stage in seen if planned)  # round 1 starts with the plan
+
+
+def test_a_progress_callback_that_interrupts_stops_the_diagnosis():
+    c = syn.make_shop_case(2, hours=6.0, hidden={})
+    run = tr.Run.from_frame(c.train, source="shop")
+
+    def stop(done, planned, stage):
+        raise KeyboardInterrupt
+
+    m = Machine.from_toml(c.nominal_toml())
+    with pytest.raises(KeyboardInterrupt):
+        m._inner.diagnose(*tr.thermal._run_args(run), None, progress=stop)
+    # the interrupt is spent: the next call runs to its end
+    assert tr.thermal.diagnose(run, m, axis="E_ch2", progress=False).verdict
+
+
+def test_the_bar_is_drawn_when_asked(capsys):
+    c = syn.make_shop_case(2, hours=6.0, hidden={})
+    run = tr.Run.from_frame(c.train, source="shop")
+    tr.thermal.diagnose(run, Machine.from_toml(c.nominal_toml()), axis="E_ch2", progress=True)
+    err = capsys.readouterr().err
+    assert "diagnosis, round 1" in err and "fit" in err
+    tr.thermal.diagnose(run, Machine.from_toml(c.nominal_toml()), axis="E_ch2", progress=False)
+    assert capsys.readouterr().err == ""

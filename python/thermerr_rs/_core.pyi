@@ -1,11 +1,10 @@
 # Stubs of the Rust extension module thermerr_rs._core (checked by mypy.stubtest in CI).
 # Each family has its own section; the user-facing docs live in the Python wrappers.
-from typing import Any, final
+from collections.abc import Callable
+from typing import Any, TypeAlias, final
 
 import numpy as np
 import numpy.typing as npt
-
-from typing import TypeAlias
 
 _F64: TypeAlias = npt.NDArray[np.float64]
 
@@ -180,11 +179,14 @@ class MachineModel:
         holdout_fraction: float = 0.3,
         min_score: float = 0.1,
         noise_ratio: float = 2.0,
+        progress: Callable[[int, int, int], object] | None = None,
     ) -> dict[str, Any]:
         """The diagnosis in rounds: ``report`` (report.json as JSON text: the round-1 fields, plus
         ``causes`` — each accepted cause's ``cause``, ``column``, ``node``, ``axis``, ``gain_pct``,
         ``params``, ``round``, ``rmse_um`` in the order accepted —, ``remainder_um`` and ``rounds``),
-        ``calibration``, ``series``, ``calibrated_toml`` and ``extended_toml`` (every named cause)."""
+        ``calibration``, ``series``, ``calibrated_toml`` and ``extended_toml`` (every named cause).
+        ``progress`` is called with ``(done, planned, round)`` of the calibrations every 50 ms
+        while they change."""
         ...
     def diagnose_axes(
         self,
@@ -198,6 +200,7 @@ class MachineModel:
         holdout_fraction: float = 0.3,
         min_score: float = 0.1,
         noise_ratio: float = 2.0,
+        progress: Callable[[int, int, int], object] | None = None,
     ) -> list[dict[str, Any]]:
         """``diagnose`` of every axis in ``axes`` (empty: every drift entry), in parallel; a list
         of its dicts in ``axes`` order."""

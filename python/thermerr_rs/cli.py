@@ -384,7 +384,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         _stage(args, f"diagnosing {args.machine} on {run.source}, {len(axes)} axes ({', '.join(axes)}) in "
                      "parallel: calibrating each baseline, screening every candidate extension ...")
         t0 = time.perf_counter()
-        multi = diagnose_axes(run, machine, hold, axes=axes)
+        multi = diagnose_axes(run, machine, hold, axes=axes, progress=_progress_enabled(args))
         _stage(args, f"diagnosed {len(axes)} axes in {time.perf_counter() - t0:.1f} s")
         for a in multi.axes:
             _stage(args, f"  {a}: " + _stage_times(multi[a].report))
@@ -393,7 +393,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         _stage(args, f"diagnosing {args.machine} on {run.source}: calibrating the baseline, screening "
                      "every candidate extension ...")
         t0 = time.perf_counter()
-        result = diagnose(run, machine, hold, axis=axes[0] if axes else None)
+        result = diagnose(run, machine, hold, axis=axes[0] if axes else None, progress=_progress_enabled(args))
         _stage(args, f"diagnosed in {time.perf_counter() - t0:.1f} s: " + _stage_times(result.report))
     page = result.write(args.out)
     if args.json:

@@ -5,6 +5,9 @@ from __future__ import annotations
 
 import json
 import os
+import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -204,18 +207,45 @@ class Diagnosis:
                 f"held-out RMS: baseline {b['rmse_um']:.3f} µm, extended {e['rmse_um']:.3f} µm, gain {self.gain_pct:.1f} %")
 
 
+@contextmanager
+def _progress_bar(show: bool | None, desc: str) -> Iterator[Callable[[int, int, int], None] | None]:
+    """A tqdm bar of the calibrations a diagnosis has done out of those planned so far (the plan
+    grows when a round starts), with the round reached; shown on a terminal (``show=None``:
+    when stderr is one), and closed however the call ends."""
+    if not (sys.stderr.isatty() if show is None else show):
+        yield None
+        return
+    from tqdm import tqdm
+
+    bar = tqdm(total=0, desc=desc, unit="fit", leave=False)
+
+    def update(done: int, planned: int, stage: int) -> None:
+        bar.total = planned
+        bar.n = done
+        bar.set_description(f"{desc}, round {stage}" if stage else desc, refresh=False)
+        bar.refresh()
+
+    try:
+        yield update
+    finally:
+        bar.close()
+
+
 def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: str | None = None,
-             holdout_fraction: float = 0.3, min_score: float = 0.1, noise_ratio: float = 2.0) -> Diagnosis:
+             holdout_fraction: float = 0.3, min_score: float = 0.1, noise_ratio: float = 2.0,
+             progress: bool | None = None) -> Diagnosis:
     """Calibrate ``machine`` on ``run`` (its first 70 % when no ``holdout`` run is given), fit the
     extension of every catalogued cause, score all on the held-out data and name the cause; then
     go on in rounds on the extended machine while a further cause passes (docs/machine-model.md).
 
     Every figure in the result is on held-out data: the ``holdout`` run, or the last
-    ``holdout_fraction`` of ``run``.
+    ``holdout_fraction`` of ``run``. ``progress``: a bar of the calibrations done (default: when
+    stderr is a terminal).
     """
-    d = machine._inner.diagnose(*_run_args(run), _run_args(holdout) if holdout is not None else None,
-                                axis=axis, holdout_fraction=holdout_fraction, min_score=min_score,
-                                noise_ratio=noise_ratio)
+    with _progress_bar(progress, "diagnosis") as cb:
+        d = machine._inner.diagnose(*_run_args(run), _run_args(holdout) if holdout is not None else None,
+                                    axis=axis, holdout_fraction=holdout_fraction, min_score=min_score,
+                                    noise_ratio=noise_ratio, progress=cb)
     return _diagnosis(d)
 
 
@@ -280,12 +310,14 @@ class AxesDiagnosis:
 
 def diagnose_axes(run: Run, machine: Machine, holdout: Run | None = None, *, axes: list[str] | None = None,
                   holdout_fraction: float = 0.3, min_score: float = 0.1,
-                  noise_ratio: float = 2.0) -> AxesDiagnosis:
+                  noise_ratio: float = 2.0, progress: bool | None = None) -> AxesDiagnosis:
     """:func:`diagnose` for several error axes at once (default: every drift entry of the
     machine), in parallel. Each axis is diagnosed on the shared temperatures and its own error
-    column, with its own calibration of the network and its own causes and remainder."""
-    ds = machine._inner.diagnose_axes(*_run_args(run), _run_args(holdout) if holdout is not None else None,
-                                      axes=list(axes or []), holdout_fraction=holdout_fraction,
-                                      min_score=min_score, noise_ratio=noise_ratio)
+    column, with its own calibration of the network and its own causes and remainder.
+    ``progress``: one bar of every axis's calibrations (default: when stderr is a terminal)."""
+    with _progress_bar(progress, "diagnosis of the axes") as cb:
+        ds = machine._inner.diagnose_axes(*_run_args(run), _run_args(holdout) if holdout is not None else None,
+                                          axes=list(axes or []), holdout_fraction=holdout_fraction,
+                                          min_score=min_score, noise_ratio=noise_ratio, progress=cb)
     out = {d.axis: d for d in map(_diagnosis, ds)}
     return AxesDiagnosis(out, run.source, machine._inner.file)

@@ -25,6 +25,8 @@ pub mod metrics;
 pub mod nn;
 #[cfg(feature = "fit")]
 pub mod optim;
+#[cfg(feature = "fit")]
+pub mod progress;
 pub mod rbf;
 #[cfg(feature = "fit")]
 pub mod run;

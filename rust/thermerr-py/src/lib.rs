@@ -33,6 +33,16 @@ pub(crate) fn detach<T: Send>(
     py: Python<'_>,
     f: impl FnOnce() -> thermerr_core::Result<T> + Send,
 ) -> PyResult<T> {
+    detach_ticking(py, f, |_| {})
+}
+
+/// [`detach`], calling `tick` with the GIL held at every poll (every 50 ms) while the call runs:
+/// the place to draw a progress bar from the call's [`thermerr_core::progress::Progress`].
+pub(crate) fn detach_ticking<T: Send>(
+    py: Python<'_>,
+    f: impl FnOnce() -> thermerr_core::Result<T> + Send,
+    mut tick: impl FnMut(Python<'_>) + Send,
+) -> PyResult<T> {
     let (joined, signal) = py.detach(|| {
         std::thread::scope(|scope| {
             let caller = std::thread::current();
@@ -45,7 +55,10 @@ pub(crate) fn detach<T: Send>(
             while !worker.is_finished() {
                 std::thread::park_timeout(std::time::Duration::from_millis(50));
                 if signal.is_none() && !worker.is_finished() {
-                    if let Err(e) = Python::attach(|py| py.check_signals()) {
+                    if let Err(e) = Python::attach(|py| {
+                        tick(py);
+                        py.check_signals()
+                    }) {
                         thermerr_core::interrupt::request();
                         signal = Some(e);
                     }
@@ -54,7 +67,9 @@ pub(crate) fn detach<T: Send>(
             (worker.join(), signal)
         })
     });
-    if signal.is_some() {
+    // an interrupt raised here or by a callback (a progress bar's KeyboardInterrupt) is spent
+    // once the call has stopped: the next call starts clean
+    if signal.is_some() || matches!(joined, Ok(Err(thermerr_core::Error::Interrupted))) {
         thermerr_core::interrupt::clear();
     }
     let result = match joined {

@@ -5,6 +5,9 @@ use std::path::PathBuf;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use std::sync::Arc;
+
+use thermerr_core::progress::Progress;
 use thermerr_core::run::Run;
 use thermerr_core::thermal::calibrate::{calibrate, CalibrationOptions};
 use thermerr_core::thermal::diagnose::{
@@ -254,7 +257,7 @@ impl PyMachine {
 
     /// The full diagnosis; returns a dict: `report` (report.json as JSON text), `calibration`
     /// (the baseline's fit figures), `series` and the calibrated/extended TOML.
-    #[pyo3(signature = (source, time, names, data, holdout = None, *, axis = None, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0))]
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axis = None, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0, progress = None))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn diagnose<'py>(
         &self,
@@ -268,23 +271,33 @@ impl PyMachine {
         holdout_fraction: f64,
         min_score: f64,
         noise_ratio: f64,
+        progress: Option<Py<PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
+        let counts = Arc::new(Progress::new());
         let opts = DiagnoseOptions {
             axis,
             holdout_fraction,
             min_score,
             noise_ratio,
+            progress: Some(counts.clone()),
             ..DiagnoseOptions::default()
         };
-        let diag = self.on_runs(py, source, &time, names, &data, &holdout, |m, v, h| {
-            diagnose(m, v, h, &opts)
-        })?;
+        let diag = self.on_runs(
+            py,
+            source,
+            &time,
+            names,
+            &data,
+            &holdout,
+            progress.map(|cb| (cb, counts)),
+            |m, v, h| diagnose(m, v, h, &opts),
+        )?;
         diagnosis_dict(py, &diag, &self.file)
     }
 
     /// The diagnosis of every axis in `axes`, one per axis in parallel, each on the shared
     /// temperatures and its own error column; a list of `diagnose`'s dicts in `axes` order.
-    #[pyo3(signature = (source, time, names, data, holdout = None, *, axes, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0))]
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axes, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0, progress = None))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn diagnose_axes<'py>(
         &self,
@@ -298,16 +311,26 @@ impl PyMachine {
         holdout_fraction: f64,
         min_score: f64,
         noise_ratio: f64,
+        progress: Option<Py<PyAny>>,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
+        let counts = Arc::new(Progress::new());
         let opts = DiagnoseOptions {
             holdout_fraction,
             min_score,
             noise_ratio,
+            progress: Some(counts.clone()),
             ..DiagnoseOptions::default()
         };
-        let diags = self.on_runs(py, source, &time, names, &data, &holdout, |m, v, h| {
-            diagnose_axes(m, v, h, &axes, &opts)
-        })?;
+        let diags = self.on_runs(
+            py,
+            source,
+            &time,
+            names,
+            &data,
+            &holdout,
+            progress.map(|cb| (cb, counts)),
+            |m, v, h| diagnose_axes(m, v, h, &axes, &opts),
+        )?;
         diags
             .iter()
             .map(|d| diagnosis_dict(py, d, &self.file))
@@ -325,7 +348,8 @@ type PyHoldout<'py> = Option<(
 
 impl PyMachine {
     /// Converts the run (and the held-out run), checks their columns against the machine and
-    /// runs `f` on them with the GIL released (Ctrl-C honoured).
+    /// runs `f` on them with the GIL released (Ctrl-C honoured). With `progress`, its callable
+    /// gets `(done, planned, stage)` of the counts while `f` runs (see [`report_progress`]).
     #[allow(clippy::too_many_arguments)]
     fn on_runs<'py, T: Send>(
         &self,
@@ -335,6 +359,7 @@ impl PyMachine {
         names: Vec<String>,
         data: &PyReadonlyArray2<'py, f64>,
         holdout: &PyHoldout<'py>,
+        progress: Option<(Py<PyAny>, Arc<Progress>)>,
         f: impl FnOnce(&Machine, &RunView<'_>, Option<&RunView<'_>>) -> thermerr_core::Result<T> + Send,
     ) -> PyResult<T> {
         let run = core_run(source, time, names, data)?;
@@ -342,17 +367,48 @@ impl PyMachine {
             .as_ref()
             .map(|(s, t, n, d)| core_run(s, t, n.clone(), d))
             .transpose()?;
-        crate::detach(py, || {
-            let view = RunView::new(&run);
-            self.inner
-                .check_columns(&self.file, &run.source, |c| view.has(c))?;
-            let hview = hold.as_ref().map(RunView::new);
-            if let Some(h) = &hview {
-                self.inner
-                    .check_columns(&self.file, &h.source, |c| h.has(c))?;
+        let mut last = None;
+        let tick = move |py: Python<'_>| {
+            if let Some((cb, counts)) = &progress {
+                report_progress(py, cb, counts, &mut last);
             }
-            f(&self.inner, &view, hview.as_ref())
-        })
+        };
+        crate::detach_ticking(
+            py,
+            || {
+                let view = RunView::new(&run);
+                self.inner
+                    .check_columns(&self.file, &run.source, |c| view.has(c))?;
+                let hview = hold.as_ref().map(RunView::new);
+                if let Some(h) = &hview {
+                    self.inner
+                        .check_columns(&self.file, &h.source, |c| h.has(c))?;
+                }
+                f(&self.inner, &view, hview.as_ref())
+            },
+            tick,
+        )
+    }
+}
+
+/// Calls a Python progress callable with `(done, planned, stage)` when the counts changed
+/// since `last`. A failing callable does not stop the call; a `KeyboardInterrupt` raised in it
+/// stops it like Ctrl-C.
+fn report_progress(
+    py: Python<'_>,
+    cb: &Py<PyAny>,
+    counts: &Progress,
+    last: &mut Option<(usize, usize, usize)>,
+) {
+    let now = counts.snapshot();
+    if *last == Some(now) {
+        return;
+    }
+    *last = Some(now);
+    if let Err(e) = cb.call1(py, now) {
+        if e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
+            thermerr_core::interrupt::request();
+        }
     }
 }
 

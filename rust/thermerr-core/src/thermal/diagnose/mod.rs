@@ -47,8 +47,10 @@ use super::calibrate::{calibrate, evaluate, targets, Calibration, CalibrationOpt
 use super::machine::{Identified, Machine};
 use super::sim::RunView;
 use crate::error::{Error, Result};
+use crate::progress::{self, Progress};
 use candidates::{Baseline, Spec};
 use score::HeldOut;
+use std::sync::Arc;
 
 /// Options of [`diagnose`].
 #[derive(Clone, Debug)]
@@ -64,6 +66,9 @@ pub struct DiagnoseOptions {
     /// A baseline whose held-out RMS is within this many noise levels is "none".
     pub noise_ratio: f64,
     pub calibration: CalibrationOptions,
+    /// Counts the calibrations planned and done and the round reached, for a progress bar
+    /// (shared by the axes of [`diagnose_axes`]).
+    pub progress: Option<Arc<Progress>>,
 }
 
 impl Default for DiagnoseOptions {
@@ -75,6 +80,7 @@ impl Default for DiagnoseOptions {
             min_score: 0.1,
             noise_ratio: 2.0,
             calibration: CalibrationOptions::default(),
+            progress: None,
         }
     }
 }
@@ -260,6 +266,7 @@ struct RoundInput<'r, 'a> {
     held: &'r HeldOut<'r, 'a>,
     split: usize,
     axis: &'r str,
+    progress: Option<&'r Progress>,
 }
 
 /// One round's candidates, fitted and sorted by score (best first), and the unused `T_*`
@@ -325,11 +332,14 @@ fn round_candidates(
         }
     }
     crate::interrupt::check()?;
+    progress::plan(cx.progress, specs.len());
     let mut cands = specs
         .into_par_iter()
         .map(|spec| {
             crate::interrupt::check()?;
-            candidates::screen(spec, base, train, cx.held)
+            let c = candidates::screen(spec, base, train, cx.held);
+            progress::step(cx.progress);
+            c
         })
         .collect::<Result<Vec<_>>>()?;
     // the full fits: the best by training evidence (a drifting sensor biases the held network,
@@ -343,6 +353,7 @@ fn round_candidates(
     cands.extend(more);
     let (full, held): (Vec<Candidate>, Vec<Candidate>) = cands.into_iter().partition(shows);
     rest.extend(held);
+    progress::plan(cx.progress, full.len());
     let mut cands = full
         .into_par_iter()
         .map(|c| {
@@ -350,7 +361,9 @@ fn round_candidates(
             let spec = c
                 .spec
                 .ok_or_else(|| Error::Numerical("a screened candidate lost its spec".into()))?;
-            candidates::fit(spec, base, train, cx.held)
+            let c = candidates::fit(spec, base, train, cx.held);
+            progress::step(cx.progress);
+            c
         })
         .collect::<Result<Vec<_>>>()?;
     cands.extend(rest);
@@ -411,7 +424,11 @@ pub fn diagnose(
     copts.fit_rows = Some(split);
     let clock = std::time::Instant::now();
     let mut stage_s = BTreeMap::new();
+    let pg = opts.progress.as_deref();
+    progress::stage(pg, 1);
+    progress::plan(pg, 1);
     let baseline = calibrate(m, train, &copts, None)?;
+    progress::step(pg);
     let base_hold = score::holdout(&baseline, &held)?;
     let base = Baseline {
         calibration: &baseline,
@@ -430,6 +447,7 @@ pub fn diagnose(
         held: &held,
         split,
         axis: &axis,
+        progress: pg,
     };
     stage_s.insert("baseline", clock.elapsed().as_secs_f64());
     let (cands, untried_columns) = round_candidates(&cx, m, &base, &[], &[])?;

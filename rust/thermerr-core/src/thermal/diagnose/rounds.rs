@@ -15,6 +15,7 @@ use super::score::{self, HeldOut};
 use super::verdict::supported;
 use super::{Candidate, DiagnoseOptions, Holdout};
 use crate::error::{Error, Result};
+use crate::progress;
 use crate::thermal::calibrate::{Calibration, FreeParam};
 use crate::thermal::machine::Machine;
 use crate::thermal::sim::RunView;
@@ -193,6 +194,7 @@ where
             break;
         };
         crate::interrupt::check()?;
+        progress::stage(opts.progress.as_deref(), r);
         let carried = candidates::carry(&spec.extra, &spec.machine, &cur.calibration.machine);
         let taken: Vec<&Spec> = accepted
             .iter()
@@ -217,6 +219,7 @@ where
     let mut joint = accepted[accepted.len() - 1].1.clone();
     let mut dropped = Vec::new();
     while accepted.len() >= 2 {
+        progress::plan(opts.progress.as_deref(), accepted.len());
         let fits = (0..accepted.len())
             .into_par_iter()
             .map(|j| {
@@ -239,7 +242,9 @@ where
                     options: base.options.clone(),
                     axis_index,
                 };
-                let reduced = candidates::fit(Spec { extra, ..spec }, &b, cx.train, cx.held)?;
+                let reduced = candidates::fit(Spec { extra, ..spec }, &b, cx.train, cx.held);
+                progress::step(opts.progress.as_deref());
+                let reduced = reduced?;
                 let full = against(&joint, &reduced.calibration, &reduced.holdout);
                 Ok((j, full, reduced))
             })
