@@ -323,8 +323,8 @@ def _history(taus: Sequence[float] | None, time_s: F64) -> dict[str, Any] | None
     if taus is None:
         return None
     tau = [float(t) for t in taus]
-    step = float(np.median(np.diff(time_s))) if len(time_s) > 1 else 1.0
-    return {"tau_s": tau, "step_s": step}
+    step = _core.median_step(np.ascontiguousarray(time_s, dtype=np.float64))
+    return {"tau_s": tau, "step_s": 1.0 if step is None else step}
 
 
 def run_inputs(run: Any, features: list[str], inputs: str, history: dict[str, Any] | None) -> F64:

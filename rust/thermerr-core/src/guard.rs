@@ -27,6 +27,7 @@ use serde_json::Value;
 
 use crate::artifact::{Artifact, Header, Predictor};
 use crate::error::{Error, Result};
+use crate::timeaxis::median_step;
 
 /// The training range is widened by its span, and by at least this many units, each way.
 pub const RANGE_MARGIN_FLOOR: f64 = 20.0;
@@ -109,16 +110,19 @@ impl Guard {
                 i % d
             )));
         }
-        let time = |i: usize| times.map_or(i as f64, |t| t[i]);
-        let mut steps: Vec<f64> = (1..n).map(|i| time(i) - time(i - 1)).collect();
-        if let Some(k) = steps.iter().position(|s| !(s.is_finite() && *s > 0.0)) {
+        let clock: Vec<f64> = (0..n).map(|i| times.map_or(i as f64, |t| t[i])).collect();
+        let time = |i: usize| clock[i];
+        if let Some(k) = clock
+            .windows(2)
+            .position(|w| !(w[1] - w[0] > 0.0 && (w[1] - w[0]).is_finite()))
+        {
             return Err(Error::Shape(format!(
                 "times must increase: row {} is not after row {k}",
                 k + 1
             )));
         }
-        steps.sort_by(f64::total_cmp);
-        let step_s = steps[steps.len() / 2];
+        // every step is positive here, so the median step exists
+        let step_s = median_step(&clock).unwrap_or(1.0);
         let sensors = (0..d)
             .map(|j| {
                 let col = |i: usize| x[i * d + j];

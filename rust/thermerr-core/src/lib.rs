@@ -38,6 +38,7 @@ pub mod svr;
 pub mod swarm;
 #[cfg(feature = "fit")]
 pub mod thermal;
+pub mod timeaxis;
 #[cfg(feature = "fit")]
 pub mod tune;
 

@@ -304,8 +304,16 @@ fn history_transform<'py>(
     )
 }
 
+/// The median step of a time axis (s), as the core uses it everywhere
+/// (`thermerr_core::timeaxis::median_step`); `None` with fewer than two samples.
+#[pyfunction]
+fn median_step(times: PyReadonlyArray1<'_, f64>) -> PyResult<Option<f64>> {
+    Ok(thermerr_core::timeaxis::median_step(slice1(&times)?))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(history_transform, m)?)?;
+    m.add_function(wrap_pyfunction!(median_step, m)?)?;
     m.add_function(wrap_pyfunction!(guard_from_training, m)?)?;
     m.add_function(wrap_pyfunction!(predict_guarded, m)?)?;
     m.add_class::<PyPreprocessing>()?;

@@ -240,20 +240,7 @@ impl Thinned {
     }
 }
 
-/// The median step of a time axis (s); `None` with fewer than two samples or no positive step.
-pub fn median_step(t: &[f64]) -> Option<f64> {
-    let mut d: Vec<f64> = t
-        .windows(2)
-        .map(|w| w[1] - w[0])
-        .filter(|v| v.is_finite())
-        .collect();
-    if d.is_empty() {
-        return None;
-    }
-    let mid = d.len() / 2;
-    let (_, m, _) = d.select_nth_unstable_by(mid, f64::total_cmp);
-    (*m > 0.0).then_some(*m)
-}
+pub use crate::timeaxis::median_step;
 
 /// Distinct step lengths whose transition matrices are kept at once.
 const MAX_STEP_LENGTHS: usize = 1024;
