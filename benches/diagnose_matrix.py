@@ -8,6 +8,14 @@ periodic disturbance outside the catalogue), a 20 h stepped training run and a 1
 held-out run, a nominal model perturbed by 15-35 %. Prints the matrix, the column accuracy and
 the time per diagnosis.
 
+``--compound``: every pair of the six causes (15 pairs) hidden at once, on both topologies, for
+each seed (:func:`thermerr_rs.synthetic.make_multi_case`; ``--hours 10,5 --dt 120`` by default,
+the sizes of tests/test_diagnose_rounds.py). Per case: the causes named, whether both hidden
+ones are among them, whether their columns are right, any cause named that was not hidden, the
+held-out gain and the remainder; then a table per pair and the time per diagnosis.
+
+    python benches/diagnose_matrix.py --compound [--seeds 1-2] [--hours 10,5] [--dt 120]
+
 ``--timing``: the time of one diagnosis of all five axes of the shop run
 (:func:`thermerr_rs.synthetic.make_shop_case`: 15-s samples, sixteen sensors, ambient coupling
 on E_ch3, speed growth on E_ch1) at each row count, with each axis's verdict.
@@ -16,8 +24,11 @@ on E_ch3, speed growth on E_ch1) at each row count, with each axis's verdict.
 from __future__ import annotations
 
 import argparse
+import itertools
 import time
 from collections import Counter
+
+import numpy as np
 
 import thermerr_rs as tr
 from thermerr_rs import synthetic as syn
@@ -39,16 +50,75 @@ def timing(rows: list[int]) -> None:
         print(f"{len(run):>8} {hours:>7.1f} {dt:>8.1f}  " + ", ".join(d[a].verdict for a in d.axes), flush=True)
 
 
+def diagnosed(c: syn.Case) -> tuple[tr.thermal.Diagnosis, float]:
+    """The diagnosis of a synthetic case (training run, nominal machine, held-out run) and its time."""
+    t0 = time.perf_counter()
+    d = diagnose(tr.Run.from_frame(c.train, source="train"), Machine.from_toml(c.nominal_toml()),
+                 tr.Run.from_frame(c.test, source="test"))
+    return d, time.perf_counter() - t0
+
+
+def compound(seeds: range, hours: tuple[float, float], dt: float) -> None:
+    pairs = list(itertools.combinations(syn.CAUSES, 2))
+    rows = []
+    times = []
+    for topo in ("vmc", "lathe"):
+        for pair in pairs:
+            for seed in seeds:
+                try:
+                    c = syn.make_multi_case(topo, pair, seed, hours=hours, dt=dt)
+                except ValueError as e:
+                    print(f"{topo} {'+'.join(pair)} {seed}: not constructible: {e}", flush=True)
+                    rows.append((topo, pair, None))
+                    continue
+                d, dt_s = diagnosed(c)
+                times.append(dt_s)
+                named = {x["cause"]: x["column"] for x in d.causes}
+                both = all(h in named for h in pair)
+                with_col = [h for h in pair if c.columns.get(h)]
+                cols_ok = sum(named.get(h) == c.columns[h] for h in with_col)
+                extra = [f"{k}({v})" if v else k for k, v in named.items() if k not in pair]
+                rows.append((topo, pair, (both, cols_ok, len(with_col), extra, d.gain_pct)))
+                got = ", ".join(f"{k}({v})" if v else k for k, v in named.items()) or d.verdict
+                print(f"{topo:<6} {'+'.join(pair):<40} {seed}: {'both' if both else 'MISS':<5} "
+                      f"named: {got}; gain {d.gain_pct:.0f} %, remainder {d.remainder_um:.2f} µm, "
+                      f"{dt_s:.1f} s", flush=True)
+    print(f"\n{'topology':<7} {'pair':<40} {'both named':>10} {'columns':>8} {'gain %':>7}  other causes named")
+    for topo in ("vmc", "lathe"):
+        for pair in pairs:
+            got = [r[2] for r in rows if r[0] == topo and r[1] == pair and r[2] is not None]
+            if not got:
+                print(f"{topo:<7} {'+'.join(pair):<40} {'not constructible':>10}")
+                continue
+            both = sum(g[0] for g in got)
+            cols = f"{sum(g[1] for g in got)}/{sum(g[2] for g in got)}" if any(g[2] for g in got) else "-"
+            extra = sorted({e for g in got for e in g[3]})
+            print(f"{topo:<7} {'+'.join(pair):<40} {f'{both}/{len(got)}':>10} {cols:>8} "
+                  f"{np.mean([g[4] for g in got]):7.1f}  {', '.join(extra)}")
+    done = [r[2] for r in rows if r[2] is not None]
+    print(f"\nboth named: {sum(g[0] for g in done)}/{len(done)}; columns right: {sum(g[1] for g in done)}/"
+          f"{sum(g[2] for g in done)}; a cause named that was not hidden: {sum(bool(g[3]) for g in done)}/{len(done)}")
+    if times:
+        print(f"time per diagnosis: mean {np.mean(times):.1f} s, max {max(times):.1f} s ({hours[0]:g} h + {hours[1]:g} h at {dt:g} s)")
+
+
 def main() -> None:
     p = argparse.ArgumentParser()
     p.add_argument("--seeds", default="1-5")
     p.add_argument("--timing", action="store_true")
     p.add_argument("--rows", default="1000,10000,100000")
+    p.add_argument("--compound", action="store_true")
+    p.add_argument("--hours", default="10,5", help="--compound: training and held-out hours")
+    p.add_argument("--dt", type=float, default=120.0, help="--compound: sampling step (s)")
     args = p.parse_args()
     if args.timing:
         timing([int(v) for v in args.rows.split(",")])
         return
     a, b = (int(v) for v in args.seeds.split("-"))
+    if args.compound:
+        h_train, h_test = (float(v) for v in args.hours.split(","))
+        compound(range(a, b + 1), (h_train, h_test), args.dt)
+        return
     verdicts = ["thermal_lag", "ambient_coupling", "speed_growth", "unmodeled_source",
                 "nonlinear_expansion", "sensor_drift", "none", "unexplained"]
     table: dict[str, Counter] = {h: Counter() for h in syn.HIDDEN}
@@ -59,9 +129,8 @@ def main() -> None:
         for h in syn.HIDDEN:
             for seed in range(a, b + 1):
                 c = syn.make_case(topo, h, seed)
-                t0 = time.perf_counter()
-                d = diagnose(tr.Run.from_frame(c.train), Machine.from_toml(c.nominal_toml()), tr.Run.from_frame(c.test))
-                times.append(time.perf_counter() - t0)
+                d, dt_s = diagnosed(c)
+                times.append(dt_s)
                 table[h][d.verdict] += 1
                 gains[h].append(d.gain_pct)
                 if c.column:
