@@ -27,6 +27,7 @@ import argparse
 import itertools
 import time
 from collections import Counter
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -58,46 +59,78 @@ def diagnosed(c: syn.Case) -> tuple[tr.thermal.Diagnosis, float]:
     return d, time.perf_counter() - t0
 
 
+PAIRS = list(itertools.combinations(syn.CAUSES, 2))
+
+
+@dataclass
+class Outcome:
+    """One compound case: the causes named (cause -> column), both hidden causes among them,
+    columns right of the hidden causes that have one, the causes named that were not hidden,
+    the held-out gain and remainder, the time."""
+
+    named: dict[str, str | None]
+    verdict: str
+    both: bool
+    cols_ok: int
+    cols_n: int
+    extra: list[str]
+    gain: float
+    remainder_um: float
+    seconds: float
+
+
+def compound_case(topo: str, pair: tuple[str, ...], seed: int, hours: tuple[float, float], dt: float) -> Outcome:
+    """Diagnose one pair hidden at once (make_multi_case raises ValueError if it cannot be made)."""
+    c = syn.make_multi_case(topo, pair, seed, hours=hours, dt=dt)
+    d, dt_s = diagnosed(c)
+    named = {x["cause"]: x["column"] for x in d.causes}
+    with_col = [h for h in pair if c.columns.get(h)]
+    return Outcome(
+        named=named,
+        verdict=d.verdict,
+        both=all(h in named for h in pair),
+        cols_ok=sum(named.get(h) == c.columns[h] for h in with_col),
+        cols_n=len(with_col),
+        extra=[f"{k}({v})" if v else k for k, v in named.items() if k not in pair],
+        gain=d.gain_pct,
+        remainder_um=d.remainder_um,
+        seconds=dt_s,
+    )
+
+
 def compound(seeds: range, hours: tuple[float, float], dt: float) -> None:
-    pairs = list(itertools.combinations(syn.CAUSES, 2))
-    rows = []
-    times = []
+    pairs = PAIRS
+    rows: list[tuple[str, tuple[str, ...], Outcome | None]] = []
     for topo in ("vmc", "lathe"):
         for pair in pairs:
             for seed in seeds:
                 try:
-                    c = syn.make_multi_case(topo, pair, seed, hours=hours, dt=dt)
+                    o = compound_case(topo, pair, seed, hours, dt)
                 except ValueError as e:
                     print(f"{topo} {'+'.join(pair)} {seed}: not constructible: {e}", flush=True)
                     rows.append((topo, pair, None))
                     continue
-                d, dt_s = diagnosed(c)
-                times.append(dt_s)
-                named = {x["cause"]: x["column"] for x in d.causes}
-                both = all(h in named for h in pair)
-                with_col = [h for h in pair if c.columns.get(h)]
-                cols_ok = sum(named.get(h) == c.columns[h] for h in with_col)
-                extra = [f"{k}({v})" if v else k for k, v in named.items() if k not in pair]
-                rows.append((topo, pair, (both, cols_ok, len(with_col), extra, d.gain_pct)))
-                got = ", ".join(f"{k}({v})" if v else k for k, v in named.items()) or d.verdict
-                print(f"{topo:<6} {'+'.join(pair):<40} {seed}: {'both' if both else 'MISS':<5} "
-                      f"named: {got}; gain {d.gain_pct:.0f} %, remainder {d.remainder_um:.2f} µm, "
-                      f"{dt_s:.1f} s", flush=True)
+                rows.append((topo, pair, o))
+                got = ", ".join(f"{k}({v})" if v else k for k, v in o.named.items()) or o.verdict
+                print(f"{topo:<6} {'+'.join(pair):<40} {seed}: {'both' if o.both else 'MISS':<5} "
+                      f"named: {got}; gain {o.gain:.0f} %, remainder {o.remainder_um:.2f} µm, "
+                      f"{o.seconds:.1f} s", flush=True)
     print(f"\n{'topology':<7} {'pair':<40} {'both named':>10} {'columns':>8} {'gain %':>7}  other causes named")
     for topo in ("vmc", "lathe"):
         for pair in pairs:
-            got = [r[2] for r in rows if r[0] == topo and r[1] == pair and r[2] is not None]
-            if not got:
+            outs = [r[2] for r in rows if r[0] == topo and r[1] == pair and r[2] is not None]
+            if not outs:
                 print(f"{topo:<7} {'+'.join(pair):<40} {'not constructible':>10}")
                 continue
-            both = sum(g[0] for g in got)
-            cols = f"{sum(g[1] for g in got)}/{sum(g[2] for g in got)}" if any(g[2] for g in got) else "-"
-            extra = sorted({e for g in got for e in g[3]})
-            print(f"{topo:<7} {'+'.join(pair):<40} {f'{both}/{len(got)}':>10} {cols:>8} "
-                  f"{np.mean([g[4] for g in got]):7.1f}  {', '.join(extra)}")
-    done = [r[2] for r in rows if r[2] is not None]
-    print(f"\nboth named: {sum(g[0] for g in done)}/{len(done)}; columns right: {sum(g[1] for g in done)}/"
-          f"{sum(g[2] for g in done)}; a cause named that was not hidden: {sum(bool(g[3]) for g in done)}/{len(done)}")
+            n_both = sum(g.both for g in outs)
+            cols = f"{sum(g.cols_ok for g in outs)}/{sum(g.cols_n for g in outs)}" if any(g.cols_n for g in outs) else "-"
+            others = sorted({e for g in outs for e in g.extra})
+            print(f"{topo:<7} {'+'.join(pair):<40} {f'{n_both}/{len(outs)}':>10} {cols:>8} "
+                  f"{np.mean([g.gain for g in outs]):7.1f}  {', '.join(others)}")
+    done = [o for _, _, o in rows if o is not None]
+    print(f"\nboth named: {sum(g.both for g in done)}/{len(done)}; columns right: {sum(g.cols_ok for g in done)}/"
+          f"{sum(g.cols_n for g in done)}; a cause named that was not hidden: {sum(bool(g.extra) for g in done)}/{len(done)}")
+    times = [o.seconds for o in done]
     if times:
         print(f"time per diagnosis: mean {np.mean(times):.1f} s, max {max(times):.1f} s ({hours[0]:g} h + {hours[1]:g} h at {dt:g} s)")
 

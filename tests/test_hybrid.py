@@ -4,6 +4,7 @@ network variants, model files and refusals."""
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -84,8 +85,11 @@ def test_several_runs_and_refusals(runs) -> None:
     m = tr.HybridFilterNet(variant="lrnn", **FAST).fit_runs([run, test], "E_z", SENSORS, inputs="rise")
     assert np.isfinite(m.predict_run(test)).all()
     x, y = run.matrix(SENSORS), run["E_z"]
-    with pytest.raises(ParameterError, match="limit"):
+    with pytest.raises(ParameterError, match="limit") as e:
         tr.HybridFilterNet(limit=5.0, **FAST).fit(x, y)
+    # the message names the largest error of the training rows, not the first one over the limit
+    said = float(re.search(r"reaches ±([0-9.e+-]+)", str(e.value)).group(1))
+    assert np.abs(y[10:]).max() <= said <= np.abs(y).max()
     with pytest.raises(ParameterError, match="variant"):
         tr.HybridFilterNet(variant="lstm").fit(x, y)
     with pytest.raises(ParameterError, match="trainer"):

@@ -486,12 +486,12 @@ impl HybridValidParams {
                 }
             }
             let targets: Vec<f64> = yt.iter().map(|v| v / self.limit).collect();
-            if let Some(v) = targets.iter().find(|v| v.abs() >= 1.0) {
+            let largest = yt.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            if largest >= self.limit {
                 return Err(Error::param(
                     "limit",
                     format!(
-                        "the error reaches {} but the network's output is limited to ±{}",
-                        v * self.limit,
+                        "the error reaches ±{largest} but the network's output is limited to ±{}",
                         self.limit
                     ),
                 ));
