@@ -60,11 +60,13 @@ class Candidate:
 
 
 def candidates(families: Sequence[str], history: Sequence[float] | None) -> list[Candidate]:
-    """The fixed grid: MLR; RBF k-means with 10/20/40 centres × spread 0.5/1/2 (in the inputs'
+    """The fixed grid: MLR, plain and with a ridge penalty α 1 and 10 (inputs in K: a long
+    history of correlated readings fitted on a short early split extrapolates wildly without
+    one); RBF k-means with 10/20/40 centres × spread 0.5/1/2 (in the inputs'
     units, K of rise); SVR with C 1/10/100 × gamma 0.01/0.1/'scale'. With ``history``, each again
     with those time constants."""
     grid: dict[str, list[dict[str, Any]]] = {
-        "mlr": [{}],
+        "mlr": [{}, {"alpha": 1.0}, {"alpha": 10.0}],
         "rbf": [{"n_centers": k, "spread": s} for k in (10, 20, 40) for s in (0.5, 1.0, 2.0)],
         "svr": [{"C": c, "gamma": g, "epsilon": 0.1} for c in (1.0, 10.0, 100.0) for g in (0.01, 0.1, "scale")],
     }

@@ -1,4 +1,5 @@
-//! Multiple linear regression: ordinary least squares with an intercept.
+//! Multiple linear regression: ordinary least squares with an intercept, optionally with an L2
+//! penalty on the slopes (ridge, `alpha`).
 
 use serde::{Deserialize, Serialize};
 
@@ -18,6 +19,10 @@ pub struct MlrParams(MlrValidParams);
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct MlrValidParams {
     pub fit_intercept: bool,
+    /// L2 penalty α on the slopes (0: ordinary least squares); the intercept is not penalised,
+    /// as in scikit-learn's `Ridge`.
+    #[serde(default)]
+    pub alpha: f64,
 }
 
 impl Default for MlrParams {
@@ -25,6 +30,7 @@ impl Default for MlrParams {
     fn default() -> Self {
         MlrParams(MlrValidParams {
             fit_intercept: true,
+            alpha: 0.0,
         })
     }
 }
@@ -40,8 +46,20 @@ impl MlrParams {
         self
     }
 
-    /// Every value is valid; kept for the shape every family shares.
+    /// The L2 penalty on the slopes (ridge regression); 0 is ordinary least squares.
+    pub fn alpha(mut self, v: f64) -> Self {
+        self.0.alpha = v;
+        self
+    }
+
+    /// `alpha` must be finite and ≥ 0.
     pub fn check(self) -> Result<MlrValidParams> {
+        if !(self.0.alpha.is_finite() && self.0.alpha >= 0.0) {
+            return Err(Error::param(
+                "alpha",
+                format!("must be a finite number >= 0, got {}", self.0.alpha),
+            ));
+        }
         Ok(self.0)
     }
 }
@@ -56,7 +74,9 @@ pub struct MlrModel {
 #[cfg(feature = "fit")]
 impl MlrValidParams {
     /// Fits by least squares on centred data, as scikit-learn's `LinearRegression` does (centring
-    /// keeps the intercept out of the conditioning of the design matrix).
+    /// keeps the intercept out of the conditioning of the design matrix). With `alpha` > 0 the
+    /// slopes minimise ‖Aw − b‖² + α‖w‖² (scikit-learn's `Ridge`), solved as the least squares
+    /// of A stacked on √α·I (b on zeros), which never forms AᵀA.
     pub fn fit(&self, x: Samples<'_>, y: &[f64]) -> Result<MlrModel> {
         x.require_finite("X")?;
         check_target(y, x.nrows())?;
@@ -73,8 +93,19 @@ impl MlrValidParams {
         } else {
             (vec![0.0; d], 0.0)
         };
-        let a = faer::Mat::from_fn(n, d, |i, j| x.get(i, j) - xm[j]);
-        let b: Vec<f64> = y.iter().map(|v| v - ym).collect();
+        let rows = if self.alpha > 0.0 { n + d } else { n };
+        let root = self.alpha.sqrt();
+        let a = faer::Mat::from_fn(rows, d, |i, j| {
+            if i < n {
+                x.get(i, j) - xm[j]
+            } else if i - n == j {
+                root
+            } else {
+                0.0
+            }
+        });
+        let mut b: Vec<f64> = y.iter().map(|v| v - ym).collect();
+        b.resize(rows, 0.0);
         let coef = lstsq(a.as_ref(), &b)?;
         let intercept = ym - coef.iter().zip(&xm).map(|(c, m)| c * m).sum::<f64>();
         Ok(MlrModel { coef, intercept })

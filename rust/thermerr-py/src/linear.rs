@@ -16,14 +16,17 @@ pub struct PyMlrModel {
 #[pymethods]
 impl PyMlrModel {
     #[staticmethod]
-    #[pyo3(signature = (x, y, *, fit_intercept = None))]
+    #[pyo3(signature = (x, y, *, fit_intercept = None, alpha = None))]
     fn fit(
         py: Python<'_>,
         x: PyReadonlyArray2<'_, f64>,
         y: PyReadonlyArray1<'_, f64>,
         fit_intercept: Option<bool>,
+        alpha: Option<f64>,
     ) -> PyResult<Self> {
-        let params = MlrParams::new().given(fit_intercept, MlrParams::fit_intercept);
+        let params = MlrParams::new()
+            .given(fit_intercept, MlrParams::fit_intercept)
+            .given(alpha, MlrParams::alpha);
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
         let inner = crate::detach(py, || params.check()?.fit(xs, ys))?;
         Ok(PyMlrModel { inner })
