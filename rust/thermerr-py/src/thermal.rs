@@ -273,15 +273,8 @@ impl PyMachine {
         noise_ratio: f64,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let counts = Arc::new(Progress::new());
-        let opts = DiagnoseOptions {
-            axis,
-            holdout_fraction,
-            min_score,
-            noise_ratio,
-            progress: Some(counts.clone()),
-            ..DiagnoseOptions::default()
-        };
+        let (opts, watch) =
+            diagnose_options(axis, holdout_fraction, min_score, noise_ratio, progress);
         let diag = self.on_runs(
             py,
             source,
@@ -289,7 +282,7 @@ impl PyMachine {
             names,
             &data,
             &holdout,
-            progress.map(|cb| (cb, counts)),
+            watch,
             |m, v, h| diagnose(m, v, h, &opts),
         )?;
         diagnosis_dict(py, &diag, &self.file)
@@ -313,14 +306,8 @@ impl PyMachine {
         noise_ratio: f64,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let counts = Arc::new(Progress::new());
-        let opts = DiagnoseOptions {
-            holdout_fraction,
-            min_score,
-            noise_ratio,
-            progress: Some(counts.clone()),
-            ..DiagnoseOptions::default()
-        };
+        let (opts, watch) =
+            diagnose_options(None, holdout_fraction, min_score, noise_ratio, progress);
         let diags = self.on_runs(
             py,
             source,
@@ -328,7 +315,7 @@ impl PyMachine {
             names,
             &data,
             &holdout,
-            progress.map(|cb| (cb, counts)),
+            watch,
             |m, v, h| diagnose_axes(m, v, h, &axes, &opts),
         )?;
         diags
@@ -359,7 +346,7 @@ impl PyMachine {
         names: Vec<String>,
         data: &PyReadonlyArray2<'py, f64>,
         holdout: &PyHoldout<'py>,
-        progress: Option<(Py<PyAny>, Arc<Progress>)>,
+        progress: Watch,
         f: impl FnOnce(&Machine, &RunView<'_>, Option<&RunView<'_>>) -> thermerr_core::Result<T> + Send,
     ) -> PyResult<T> {
         let run = core_run(source, time, names, data)?;
@@ -389,6 +376,29 @@ impl PyMachine {
             tick,
         )
     }
+}
+
+/// A diagnosis's options from the binding's arguments; with a progress callable, the counts it
+/// is fed from (the options count into them).
+type Watch = Option<(Py<PyAny>, Arc<Progress>)>;
+
+fn diagnose_options(
+    axis: Option<String>,
+    holdout_fraction: f64,
+    min_score: f64,
+    noise_ratio: f64,
+    progress: Option<Py<PyAny>>,
+) -> (DiagnoseOptions, Watch) {
+    let counts = progress.as_ref().map(|_| Arc::new(Progress::new()));
+    let opts = DiagnoseOptions {
+        axis,
+        holdout_fraction,
+        min_score,
+        noise_ratio,
+        progress: counts.clone(),
+        ..DiagnoseOptions::default()
+    };
+    (opts, progress.zip(counts))
 }
 
 /// Calls a Python progress callable with `(done, planned, stage)` when the counts changed
