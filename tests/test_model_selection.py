@@ -71,3 +71,15 @@ def test_cli_model_auto(example_run1, example_run2, tmp_path, capsys):
     board = report["selection"]["leaderboard"]
     assert len(board) == 21 and report["model"] == board[0]["model"]
     assert json.loads(out.read_text())["kind"] == board[0]["family"]
+
+
+def test_cli_model_auto_draws_a_bar_on_a_terminal(example_run1, tmp_path, capsys, monkeypatch):
+    from thermerr_rs import cli
+
+    monkeypatch.setattr(cli, "_progress_enabled", lambda args: True)  # as when stderr is a terminal
+    out = tmp_path / "auto.json"
+    assert cli.main(["fit", str(example_run1), "--axis", "E_z", "--model", "auto", "--sensors", ",".join(SENSORS),
+                     "--cv", "3", "--out", str(out), "--no-fallbacks"]) == 0
+    err = capsys.readouterr().err
+    assert "model selection" in err and "candidate" in err  # the tqdm bar, not a line per candidate
+    assert "candidate 1/21" not in err

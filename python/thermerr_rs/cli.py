@@ -216,11 +216,28 @@ def cmd_fit(args: argparse.Namespace) -> int:
     if args.model == "auto":
         from .model_selection import select_model
 
-        def step(k: int, n: int, label: str) -> None:
-            _stage(args, f"candidate {k}/{n}: {label}")
+        bar: Any = None
+        if _progress_enabled(args):  # a bar on a terminal, a line per candidate in a log
+            from tqdm import tqdm
 
-        selection = select_model(run, args.axis, sensors, history=args.history, inputs=args.inputs, cv=args.cv,
-                                 gap=args.gap, budget_s=args.budget, seed=args.seed, progress=step)
+            bar = tqdm(desc="model selection", unit="candidate", leave=False)
+
+        def step(k: int, n: int, label: str) -> None:
+            if bar is None:
+                _stage(args, f"candidate {k}/{n}: {label}")
+                return
+            bar.total = n
+            bar.n = k - 1  # candidate k starts: k - 1 are scored
+            bar.set_postfix_str(label, refresh=False)
+            bar.refresh()
+
+        try:
+            selection = select_model(run, args.axis, sensors, history=args.history, inputs=args.inputs,
+                                     cv=args.cv, gap=args.gap, budget_s=args.budget, seed=args.seed,
+                                     progress=step)
+        finally:
+            if bar is not None:
+                bar.close()
         model = selection.model
         _say(args, f"leaderboard ({selection.n_splits} time-ordered splits of the training run, gap {selection.gap}):")
         _say(args, "  " + str(selection).replace("\n", "\n  "))
