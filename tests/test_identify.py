@@ -4,43 +4,39 @@
 Rates at which the diagnosis names the hidden cause (and its column, where it has one), with the
 machine identified from the training run WITHOUT the nominal TOML, and with the nominal TOML of
 ``synthetic.make_case`` (perturbed true parameters). Runs of 8 h training / 4 h held out at 120-s
-sampling (the default test cases; the full-size runs are below), seeds 1 and 2, measured by
-``THERMERR_IDENTIFY_SWEEP=1`` (the sweep test at the end):
+sampling (the full-size runs are below), seeds 1 and 2, measured by ``test_rate_sweep`` (about
+10 s for the 40 diagnoses, so it runs by default):
 
 =================  ==========  ==========================  ==========================
 topology           cause       identified (seeds 1, 2)     nominal TOML (seeds 1, 2)
 =================  ==========  ==========================  ==========================
-vmc                ambient     2/2                         1/2 (seed 1: unexplained)
-vmc                unmodeled   1/2 (T_cabinet named)       2/2
-vmc                lag         1/2 (ambient_coupling)      2/2
-vmc                drift       1/2 (unexplained)           2/2
-vmc                none        0/2 (unmodeled, speed)      2/2
-lathe              ambient     1/2 (unexplained)           2/2
+vmc                ambient     2/2                         2/2
+vmc                unmodeled   2/2                         2/2
+vmc                lag         2/2                         2/2
+vmc                drift       1/2 (seed 1: unexplained)   1/2 (seed 1: none)
+vmc                none        1/2 (seed 1: ambient)       2/2
+lathe              ambient     1/2 (seed 2: unexplained)   2/2
 lathe              unmodeled   0/2 (none, unexplained)     2/2
 lathe              lag         2/2                         2/2
-lathe              drift       0/2 (unmodeled T_cabinet)   2/2
-lathe              none        0/2 (unexplained)           2/2
-all                            8/20                        19/20
+lathe              drift       1/2 (seed 1: unexplained)   2/2
+lathe              none        2/2                         2/2
+all                            14/20                       19/20
 =================  ==========  ==========================  ==========================
 
-So the identified machine is NOT a start as good as the nominal one for the diagnosis: 8 of 20
-against 19 of 20. Its own fit is good (held-out RMS on the last 30 % of the training run 0.16 µm
-on the lathe and 0.78 µm on the VMC without a hidden effect), but the diagnosis scores on a
-separate run with another duty (random, not stepped), and there the identified network — fewer
-nodes, no unsensed bed, a tree found from one stepped run — leaves a structured residual, so it
-says ``unexplained`` or names a spare column where the nominal machine says ``none`` or names the
-cause. The brief's bar (within one case of the nominal's count) is kept in ``test_rate_sweep`` as
-a strict xfail, so it reports when identification gets there; it was not widened.
-
-The default run checks the two cases in ``CASES``, picked AFTER the sweep for speed (the cheapest
-diagnoses, about 10 s each) and with one miss of the identified machine among them: it pins the
-measured outcome (identified 1, nominal 2: within ``MAX_SHORTFALL`` = 1) as a regression guard and
-says little about the rate by itself; the sweep is the measurement.
+(It was 8/20 against 19/20 before identification calibrated from two starts, the heat balances'
+equation-error estimate and the rough one, and built the tree from both nodes' heat balances.)
+On the VMC the identified machine is now within one case of the nominal (8/10 against 9/10), and
+``test_rate_sweep[vmc]`` asserts it. On the lathe it is not (6/10 against 10/10): its own fit is
+good, but the diagnosis scores on a separate run with another duty (random, not stepped), and
+there the identified network — fewer nodes, a tree found from one stepped run — can leave a
+structured residual (``unexplained``) or absorb the hidden effect (the unmodelled source, seed 1:
+``none``) where the nominal machine names the cause. ``test_rate_sweep[lathe]`` keeps the brief's
+bar (within one case of the nominal's count) as a strict xfail, so it reports when
+identification gets there; it was not widened.
 """
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -54,10 +50,7 @@ from thermerr_rs.thermal import Machine, diagnose
 
 HOURS, DT_S = (8.0, 4.0), 120.0
 CAUSES = ("ambient_coupling", "unmodeled_source", "thermal_lag", "sensor_drift", "none")
-# picked after the sweep for speed, one identified miss among them (module docstring); a first
-# choice made before measuring, (lathe ambient_coupling 1, vmc unmodeled_source 1, lathe
-# sensor_drift 1), measured identified 1 / nominal 3 and took ~3 min: too slow for this file
-CASES = [("vmc", "sensor_drift", 2), ("lathe", "none", 1)]
+# the brief's bar: the identified machine names the hidden cause within one case of the nominal
 MAX_SHORTFALL = 1
 
 
@@ -80,20 +73,11 @@ def _both(topology, hidden, seed):
     return c, d_id, d_nom
 
 
-def test_identified_machine_finds_hidden_causes_about_as_often_as_the_nominal():
-    hits_id = hits_nom = 0
-    lines = []
-    for topology, hidden, seed in CASES:
-        c, d_id, d_nom = _both(topology, hidden, seed)
-        hits_id += _hit(c, d_id)
-        hits_nom += _hit(c, d_nom)
-        lines.append(f"{topology} {hidden} {seed}: identified {d_id.verdict} {d_id.column}, nominal {d_nom.verdict} {d_nom.column}")
-    assert hits_id >= hits_nom - MAX_SHORTFALL, "\n".join(lines)
-
-
-@pytest.mark.skipif(not os.environ.get("THERMERR_IDENTIFY_SWEEP"), reason="the rate sweep takes minutes: THERMERR_IDENTIFY_SWEEP=1")
-@pytest.mark.xfail(strict=True, reason="measured 8/20 identified vs 19/20 nominal (module docstring): not yet within one case")
-@pytest.mark.parametrize("topology", ["vmc", "lathe"])
+@pytest.mark.parametrize("topology", [
+    "vmc",
+    pytest.param("lathe", marks=pytest.mark.xfail(
+        strict=True, reason="measured 6/10 identified vs 10/10 nominal on the lathe (module docstring): not yet within one case")),
+])
 def test_rate_sweep(topology):
     rates = {}
     for hidden in CAUSES:

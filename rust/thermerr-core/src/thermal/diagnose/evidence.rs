@@ -84,6 +84,7 @@ pub fn rounds(
     noise_um: f64,
     axis: &str,
     named: bool,
+    min_score: f64,
 ) -> String {
     let mut out = String::new();
     for r in rounds.iter().filter(|r| r.round > 1) {
@@ -100,12 +101,26 @@ pub fn rounds(
                 100.0 * r.excess_share,
                 r.delta_bic
             )),
-            (Some(what), false) => out.push_str(&format!(
-                " In round {} no further extension passes (best: {what}, removing {:.0} % of what stays above the probe noise, {:.0} % needed).",
-                r.round,
-                100.0 * r.excess_share.max(0.0),
-                100.0 * MIN_SHARE_OF_EXCESS
-            )),
+            (Some(what), false) => {
+                // the round's best is supported (ΔBIC, gains): say which bar of the rule it misses
+                let share = 100.0 * r.excess_share.max(0.0);
+                let why = if r.excess_share < MIN_SHARE_OF_EXCESS {
+                    format!(
+                        "removing {share:.0} % of what stays above the probe noise, {:.0} % needed",
+                        100.0 * MIN_SHARE_OF_EXCESS
+                    )
+                } else {
+                    format!(
+                        "removing {share:.0} % of what stays above the probe noise but only {:.1} % of the normalised held-out residual (error and temperatures), {:.0} % needed",
+                        100.0 * r.score,
+                        100.0 * min_score
+                    )
+                };
+                out.push_str(&format!(
+                    " In round {} no further extension passes (best: {what}, {why}).",
+                    r.round
+                ))
+            }
             (None, _) => out.push_str(&format!(
                 " In round {} no further extension lowers the held-out error.",
                 r.round

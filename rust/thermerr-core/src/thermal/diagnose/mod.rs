@@ -501,6 +501,7 @@ pub fn diagnose(
         noise,
         &axis,
         !outcome.causes.is_empty(),
+        opts.min_score,
     ));
     let (holdout_label, holdout_time, holdout_measured) = match hold {
         Some(h) => (
