@@ -29,6 +29,23 @@ def test_fit_and_evaluate_mlr(example_run1, example_run2, tmp_path, capsys):
     assert report["compensation_rate"] > 0.9
 
 
+def test_fit_mlr_alpha_is_the_ridge_of_the_python_api(example_run1, tmp_path, capsys):
+    out = tmp_path / "ridge.json"
+    assert main(["fit", str(example_run1), "--axis", "E_z", "--model", "mlr", "--alpha", "10",
+                 "--no-guard", "--out", str(out), "--quiet"]) == 0
+    saved = tr.load_model(out)
+    run = tr.read_run(example_run1)
+    sensors = run.temperatures
+    ref = tr.MLR(alpha=10.0).fit_run(run, "E_z", sensors)
+    # the same fit of the same rows: equal to the last bits, not within a tolerance of a method
+    np.testing.assert_allclose(saved.coef_, ref.coef_, rtol=1e-12, atol=1e-12)
+    plain = tr.MLR().fit_run(run, "E_z", sensors)
+    assert np.abs(saved.coef_).sum() < np.abs(plain.coef_).sum()  # the penalty shrinks the slopes
+    with pytest.raises(SystemExit) as bad:  # argparse: usage and one line, exit 2
+        main(["fit", str(example_run1), "--axis", "E_z", "--alpha", "-1", "--out", str(out)])
+    assert bad.value.code == 2 and "argument --alpha: must be a finite number >= 0" in capsys.readouterr().err
+
+
 def test_bad_input_is_one_line(example_run1, tmp_path, capsys):
     rc = main(["fit", str(example_run1), "--axis", "E_q", "--out", str(tmp_path / "m.json")])
     err = capsys.readouterr().err

@@ -169,7 +169,7 @@ def _make_svr(args: argparse.Namespace, run: Run, sensors: list[str]) -> Estimat
 def _make_model(args: argparse.Namespace, n_train: int) -> Estimator:
     hidden = {} if args.hidden is None else {"hidden": args.hidden}  # else each family's default
     if args.model == "mlr":
-        return MLR()
+        return MLR(alpha=args.alpha)
     if args.model in ("greybp", "gm1n", "bp"):
         from .grey import GM1N, BPNetwork, GreyBP
 
@@ -506,6 +506,9 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--sensors", default="all", help="'all' (default), 'auto' (fuzzy c-means selection) or T_a,T_b,...")
     f.add_argument("--n-clusters", type=_positive_int, default=4, help="clusters for --sensors auto (default 4)")
     f.add_argument("--seed", type=_nonneg_int, default=0, help="seed of every stochastic step (default 0)")
+    f.add_argument("--alpha", type=_nonneg_float, default=0.0,
+                   help="MLR: ridge penalty on the slopes, in the units of the centred inputs' sums of squares "
+                        "(default 0: least squares; --model auto tries 1 and 10)")
     f.add_argument("--design", choices=["exact", "ols", "kmeans"], default="ols", help="RBF design (default ols)")
     f.add_argument("--spread", type=float, default=1.0, help="RBF spread on [0,1]-scaled inputs (default 1.0)")
     f.add_argument("--goal", type=float, default=None,
