@@ -2,11 +2,17 @@
 seeds: 60 diagnoses of 10 h + 5 h runs at 120 s (tests/test_diagnose_rounds.py's sizes), the
 compound matrix of ``benches/diagnose_matrix.py --compound`` (its code, imported from there).
 
-Measured on 2026-11-23 (docs/machine-model.md, "Two effects at once"): both hidden causes named
-in 31 of 60 cases, the columns of the hidden causes that have one right in 25 of 40, and a cause
-that was not hidden named in 4 of 60 (nonlinear_expansion for a lag, speed_growth for a lag
-with a nonlinear expansion twice, ambient_coupling for a lag with speed growth). Most misses name
-one of the two causes, or say `unexplained` with a remainder, rather than a wrong one.
+Measured on 2026-11-24 (docs/machine-model.md, "Two effects at once"): both hidden causes named
+in 28 of 60 cases, the columns of the hidden causes that have one right in 25 of 40, and a cause
+that was not hidden named in 4 of 60 (nonlinear_expansion for a lag with an ambient coupling,
+ambient_coupling for speed growth with a source and for a lag with speed growth, speed_growth
+for a lag with a nonlinear expansion). Most misses name one of the two causes, or say
+`unexplained` with a remainder, rather than a wrong one.
+
+(It read 31 of 60 the day before, and still does with the previous generator on a CPU whose
+OpenBLAS kernel is AVX2: scipy's ``expm`` went through BLAS, whose AVX-512 kernel rounds
+differently in the last bit, and three pairs flip on that. The generator now computes without
+BLAS, so these runs are the same bits on every CPU, and 28 is the figure.)
 
 The results are deterministic (seeded runs, deterministic calibration), so the floors below are
 the measured figures: a change that names fewer pairs, gets more columns wrong or names more
@@ -21,7 +27,6 @@ from pathlib import Path
 
 import pytest
 
-pytest.importorskip("scipy")  # the synthetic machines integrate with scipy
 
 _path = Path(__file__).resolve().parents[1] / "benches" / "diagnose_matrix.py"
 _spec = importlib.util.spec_from_file_location("diagnose_matrix", _path)
@@ -31,7 +36,7 @@ sys.modules[_spec.name] = dm  # its dataclass looks its module up while it is ma
 _spec.loader.exec_module(dm)
 
 HOURS, DT_S, SEEDS = (10.0, 5.0), 120.0, (1, 2)
-BOTH_NAMED_AT_LEAST = 31
+BOTH_NAMED_AT_LEAST = 28
 COLUMNS_RIGHT_AT_LEAST = 25
 NOT_HIDDEN_AT_MOST = 4
 

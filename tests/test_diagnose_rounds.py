@@ -6,7 +6,7 @@ drawn as it would be alone) with a 10 h training run (stepped duty) and a 5 h he
 (random duty), sampled every 120 s — shorter and coarser than test_diagnose.py's 20 h + 12 h
 every 60 s, so that the file stays near its time budget (each round re-fits ~20 candidates).
 
-Rates observed with this configuration (seeds 1–2, the tests; 5 of 6 pair cases fully named):
+Rates observed with this configuration (seeds 1–2, the tests; 4 of 6 pair cases fully named):
 
 * vmc, ambient_coupling + sensor_drift: seed 1 both named; seed 2 only the sensor drift — in the
   10 h training run the ambient coupling does not improve the training fit (ΔBIC +7 in round 1,
@@ -14,9 +14,17 @@ Rates observed with this configuration (seeds 1–2, the tests; 5 of 6 pair case
   remainder. xfail (strict=False) rather than a looser rule.
 * vmc, thermal_lag + speed_growth: both named on seeds 1 and 2 (speed growth in round 1, the lag
   in round 2, final held-out RMS 0.16–0.18 µm, noise 0.15 µm).
-* lathe, speed_growth + unmodeled_source (T_hydraulic): both named on seeds 1 and 2 (the source in
-  round 1, the growth in round 2). The same seed 2 with 12 h + 6 h runs names the decoy
-  T_cabinet in round 1 instead (round 1 is today's rule), so this pair is not robust to the run.
+* lathe, speed_growth + unmodeled_source (T_hydraulic): both named on seed 1 (the source in
+  round 1, the growth in round 2). On seed 2 round 2 adds the growth (held-out 1.02 -> 0.20 µm),
+  but the backward check drops it: the source refitted alone fits the training run better than
+  the joint fit did (BIC 1920 against 2113: the joint calibration sat in a worse minimum), so the
+  growth is not supported against it. Refitting the joint from the source-only fit (tried, not
+  kept) fits the training run far better (BIC 308) but holds out at 0.51 µm, and against the
+  source alone the growth then removes 0.5 % of the normalised held-out residual (error and
+  temperatures), under the 10 % bar: dropped either way. A known miss; 0.87 µm is reported as
+  the remainder. (With the previous generator, whose runs differed in the last bit on an AVX2
+  CPU, seed 2 named both; and with 12 h + 6 h runs round 1 names the decoy T_cabinet.) This
+  pair is not robust to the run.
 
 Seed 3 (run by hand, not tested): lag + growth and growth + source both named; ambient + sensor
 drift names only the ambient coupling (0.35 µm remainder at 0.16 µm noise). Single effects with
@@ -50,6 +58,8 @@ PAIRS = (
 KNOWN_MISSES = {
     ("vmc", ("ambient_coupling", "sensor_drift"), 2): "the 10 h training run does not support the "
     "ambient coupling (ΔBIC > −10): only the sensor drift is named",
+    ("lathe", ("speed_growth", "unmodeled_source"), 2): "the backward check drops the speed growth "
+    "(the source alone fits the training run better than the joint fit): only the source is named",
 }
 # the periodic disturbance outside the catalogue: a sine of period 2 h
 PERIODIC = {"amp": 1.5, "period_s": 7200.0}

@@ -9,7 +9,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("scipy")  # make_shop_case integrates with scipy
 
 _path = Path(__file__).resolve().parents[1] / "benches" / "shop_benchmark.py"
 _spec = importlib.util.spec_from_file_location("shop_benchmark", _path)

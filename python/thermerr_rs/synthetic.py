@@ -1,8 +1,9 @@
 """Synthetic machines and runs with a hidden effect: the project's test bench for diagnosis.
 
 This is deliberately separate code from the Rust simulation it is used to test: a plain
-numpy/scipy integrator (exact zero-order-hold steps through ``scipy.linalg.expm`` of the
-augmented system) of a "true" machine that may carry one effect the nominal model lacks:
+numpy integrator (exact zero-order-hold steps through the matrix exponential of the augmented
+system, computed by :func:`_expm` without BLAS, so that a seed gives the same run to the last
+bit on every CPU) of a "true" machine that may carry one effect the nominal model lacks:
 
 =====================  ===================================================================
 ``thermal_lag``        the drift follows the temperatures through a first-order lag τ
@@ -24,12 +25,12 @@ but touches nothing), so a diagnosis that names a column must find the right one
 0.03 °C, probe noise 0.15 µm. The *nominal* machine returned with a case has every parameter
 perturbed by 15–35 % and none of the hidden effect.
 
-Requires scipy (``pip install thermerr_rs[test]``).
 """
 
 from __future__ import annotations
 
 import copy
+import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -165,6 +166,32 @@ def _system(m: dict[str, Any], extra_links: list[tuple[str, str, float]]) -> tup
     return names, idx, cap, g_amb, a, b_bnd
 
 
+def _expm(a: np.ndarray) -> np.ndarray:
+    """e^A by scaling and squaring of a Taylor series, in Python floats with exactly summed
+    products (``math.fsum``): no BLAS, whose kernels (chosen by CPU: AVX2 or AVX-512) round
+    differently in the last bit, and a borderline diagnosis of a synthetic run flips on that.
+    Scaled to a norm ≤ 1/4, 18 terms leave a truncation below 1e-27; the squarings lose what
+    scipy's ``expm`` loses (tests/test_synthetic.py checks the runs against an ODE solver)."""
+    m = [[float(v) for v in row] for row in a]
+    n = len(m)
+    norm = max((sum(abs(v) for v in row) for row in m), default=0.0)
+    s = max(0, math.ceil(math.log2(norm / 0.25))) if norm > 0.25 else 0
+    m = [[v * 2.0**-s for v in row] for row in m]
+
+    def mul(p: list[list[float]], q: list[list[float]]) -> list[list[float]]:
+        cols = list(zip(*q))
+        return [[math.fsum(x * y for x, y in zip(row, col)) for col in cols] for row in p]
+
+    eye = [[1.0 if i == j else 0.0 for j in range(n)] for i in range(n)]
+    out, term = eye, eye
+    for k in range(1, 19):
+        term = [[v / k for v in row] for row in mul(term, m)]
+        out = [[x + y for x, y in zip(ro, rt)] for ro, rt in zip(out, term)]
+    for _ in range(s):
+        out = mul(out, out)
+    return np.array(out)
+
+
 def simulate_truth(
     m: dict[str, Any],
     cols: dict[str, np.ndarray],
@@ -174,8 +201,6 @@ def simulate_truth(
 ) -> dict[str, np.ndarray]:
     """Exact zero-order-hold integration of the true network; returns node temperatures (by
     node name) and the instantaneous and lagged drift of each axis (keys ``drift:<axis>``)."""
-    from scipy.linalg import expm
-
     extra = [source] if source else []
     names, idx, cap, g_amb, a, b_bnd = _system(m, extra)
     n = len(names)
@@ -187,7 +212,7 @@ def simulate_truth(
         k[idx[node]] = v
     x = np.array([cols[nd["sensor"]][0] if "sensor" in nd else amb[0] for nd in m["nodes"]], dtype=float)
     x0 = x.copy()
-    e0 = float(k @ x0)
+    e0 = float((k * x0).sum())
     z = 0.0  # lagged drift state (relative)
     temps = np.empty((len(t), n))
     e_inst = np.empty(len(t))
@@ -195,7 +220,7 @@ def simulate_truth(
     cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
     for s in range(len(t)):
         temps[s] = x
-        e_inst[s] = k @ x - e0
+        e_inst[s] = (k * x).sum() - e0
         e_lag[s] = z if lag_s else e_inst[s]
         if s == len(t) - 1:
             break
@@ -217,11 +242,12 @@ def simulate_truth(
                 big[n, :n] = k / lag_s
                 big[n, n] = -1.0 / lag_s
             big[:dim, dim:] = np.eye(dim)
-            ex = expm(big * h)
+            ex = _expm(big * h)
             pair = (ex[:dim, :dim], ex[:dim, dim:])
             cache[h] = pair
         phi, gam = pair
-        state = phi @ np.concatenate([x, [z]]) + gam @ f_aug
+        # products and sums without BLAS (whose kernels differ by CPU in the last bit)
+        state = (phi * np.concatenate([x, [z]])).sum(axis=1) + (gam * f_aug).sum(axis=1)
         x, z = state[:n], state[n]
     out = {nm: temps[:, i] for i, nm in enumerate(names)}
     out["drift:inst"] = e_inst
