@@ -151,6 +151,25 @@ def test_nothing_is_predicted_before_a_first_good_reading(guarded, example_run2,
     assert len(res.stdout.strip().splitlines()) == 1 + len(cols["time_s"]) - 3
 
 
+def test_a_sensor_dead_from_the_start_gives_way_to_its_fallback(guarded, example_run1, example_run2):
+    """A thermocouple broken when the gateway starts: nothing while it might still come (hold_s
+    = 600 s = 4 rows of 150 s), then the model fitted without it, on every row after."""
+    model, _ = guarded
+    run2 = tr.read_run(example_run2)
+    cols = {name: np.array(run2[name], dtype=np.float64) for name in ["time_s", *SENSORS, "E_z"]}
+    cols["T_s07"][:] = np.nan
+    out = tr.predict_guarded(model, cols)
+    t = cols["time_s"] - cols["time_s"][0]
+    waiting = t <= 600.0
+    assert out.status[: int(waiting.sum())] == ["waiting:T_s07"] * int(waiting.sum())
+    assert np.isnan(out.y[waiting]).all()
+    assert set(out.status[int(waiting.sum()):]) == {"fallback:T_s07"}
+    alone = tr.MLR().fit_run(tr.read_run(example_run1), "E_z", [s for s in SENSORS if s != "T_s07"], inputs="rise")
+    without = tr.Run.from_frame({k: v for k, v in cols.items() if k != "T_s07"}, source="without")
+    # the fallback is that model, and its rise baseline is the run's first row, as without a guard
+    np.testing.assert_allclose(out.y[~waiting], alone.predict_run(without)[~waiting], rtol=1e-9, atol=1e-9)
+
+
 def test_the_guard_is_saved_loaded_and_dropped_on_refit(guarded, example_run1):
     model, path = guarded
     back = tr.load_model(path)

@@ -335,6 +335,9 @@ pub struct GuardedPredictor {
     xf: Vec<f64>,
     last_y: Option<f64>,
     primed: bool,
+    /// Fallbacks primed (their rise baseline set) before the main model: the one without a
+    /// sensor that has not read well yet, on the first row where all of its own sensors have.
+    fb_primed: Vec<bool>,
     row: usize,
 }
 
@@ -378,6 +381,7 @@ impl GuardedPredictor {
             xf: vec![0.0; n.saturating_sub(1)],
             last_y: None,
             primed: false,
+            fb_primed: vec![false; n],
             row: 0,
         }))
     }
@@ -405,6 +409,7 @@ impl GuardedPredictor {
         }
         self.last_y = None;
         self.primed = false;
+        self.fb_primed.iter_mut().for_each(|p| *p = false);
         self.row = 0;
     }
 
@@ -423,6 +428,7 @@ impl GuardedPredictor {
         self.row += 1;
         let hold = self.guard.hold_s;
         let mut waiting = false;
+        let (mut dead, mut deads): (Option<usize>, usize) = (None, 0);
         let mut out: Option<usize> = None;
         let mut outs = 0usize;
         for (j, (s, lim)) in self.sensors.iter_mut().zip(&self.guard.sensors).enumerate() {
@@ -452,7 +458,14 @@ impl GuardedPredictor {
             let since = *s.fault_since.get_or_insert(t);
             self.x[j] = s.last_good;
             s.status = if !s.have_good {
-                waiting = true;
+                if t - since > hold {
+                    // never a good reading and out beyond hold_s: only the model without it
+                    // can predict (a sensor broken when the gateway starts)
+                    dead = Some(j);
+                    deads += 1;
+                } else {
+                    waiting = true;
+                }
                 SensorStatus::Waiting
             } else if t - since <= hold {
                 SensorStatus::Held
@@ -462,13 +475,57 @@ impl GuardedPredictor {
                 SensorStatus::Frozen
             };
         }
+        if waiting || deads > 0 {
+            // the model without a sensor that has not read well yet starts its rise baseline
+            // on the first row where every one of its own sensors has, as the main model would
+            for j in 0..n {
+                if self.fb_primed[j] || self.sensors[j].status != SensorStatus::Waiting {
+                    continue;
+                }
+                let sensors = &self.sensors;
+                let Some((p, idx)) = self.fallbacks[j].as_mut() else {
+                    continue;
+                };
+                if idx.iter().all(|&i| sensors[i].status == SensorStatus::Ok) {
+                    for (f, &i) in self.xf.iter_mut().zip(idx.iter()) {
+                        *f = self.x[i];
+                    }
+                    p.predict_sample_at(Some(t), &self.xf, None)?;
+                    self.fb_primed[j] = true;
+                }
+            }
+        }
         if waiting {
             return Ok(None);
+        }
+        if deads > 0 {
+            // a sensor that never read well, out beyond hold_s: its fallback predicts when it
+            // is the only one out and has one (the main model is not primed on its filler, so
+            // it starts from its first row with every sensor good); otherwise nothing yet
+            return match (deads, dead, outs) {
+                (1, Some(j), 0) if self.fallbacks[j].is_some() => {
+                    let (p, idx) = self.fallbacks[j].as_mut().expect("checked above");
+                    for (f, &i) in self.xf.iter_mut().zip(idx.iter()) {
+                        *f = self.x[i];
+                    }
+                    self.sensors[j].status = SensorStatus::Fallback;
+                    let y = p.predict_sample_at(Some(t), &self.xf, None)?;
+                    self.last_y = Some(y);
+                    Ok(Some(y))
+                }
+                _ => Ok(None),
+            };
         }
         let y_main = self.main.predict_sample_at(Some(t), &self.x, None)?;
         if !self.primed {
             // the fallbacks' rise baseline is the run's first sample, as the main model's
-            for (p, idx) in self.fallbacks.iter_mut().flatten() {
+            for (k, fb) in self.fallbacks.iter_mut().enumerate() {
+                let Some((p, idx)) = fb.as_mut() else {
+                    continue;
+                };
+                if self.fb_primed[k] {
+                    continue;
+                }
                 for (f, &i) in self.xf.iter_mut().zip(idx.iter()) {
                     *f = self.x[i];
                 }

@@ -139,6 +139,42 @@ fn two_sensors_out_freeze_and_nothing_is_predicted_before_a_first_good_reading()
 }
 
 #[test]
+fn a_sensor_dead_from_the_start_gives_way_to_its_fallback_after_hold_s() {
+    let mut g = guarded(fallback_b());
+    // T_b never reads: waiting through hold_s (10 s from the first row), then its fallback
+    for t in 0..=10 {
+        assert_eq!(
+            g.step(Some(t as f64), &[20.0, f64::NAN]).unwrap(),
+            None,
+            "t = {t}"
+        );
+        assert_eq!(status(&g), "waiting:T_b");
+    }
+    assert_eq!(
+        g.step(Some(11.0), &[20.5, f64::NAN]).unwrap(),
+        Some(4.0 * 20.5 + 1.0)
+    );
+    assert_eq!(status(&g), "fallback:T_b");
+    // it comes alive: the full model from then on
+    assert_eq!(
+        g.step(Some(12.0), &[20.5, 30.0]).unwrap(),
+        Some(2.0 * 20.5 + 3.0 * 30.0 + 1.0)
+    );
+    assert_eq!(status(&g), "ok");
+    // dead from the start without a fallback, or next to another sensor out: nothing to predict
+    let mut g = guarded(json!([]));
+    for t in 0..30 {
+        assert_eq!(g.step(Some(t as f64), &[20.0, f64::NAN]).unwrap(), None);
+    }
+    assert_eq!(status(&g), "waiting:T_b");
+    let mut g = guarded(fallback_b());
+    for t in 0..30 {
+        assert_eq!(g.step(Some(t as f64), &[f64::NAN, f64::NAN]).unwrap(), None);
+    }
+    assert_eq!(status(&g), "waiting:T_a;waiting:T_b");
+}
+
+#[test]
 fn rows_without_times_use_step_s() {
     let mut a = guarded(json!([]));
     let mut b = guarded(json!([]));
