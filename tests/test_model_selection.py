@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import thermerr_rs as tr
-from thermerr_rs.model_selection import candidates, select_model
+from thermerr_rs.model_selection import candidates, edge_latency, select_model
 
 SENSORS = ["T_s01", "T_s07", "T_s10", "T_s13"]
 
@@ -49,6 +49,19 @@ def test_history_doubles_the_candidates_and_is_refitted_with_the_winner(example_
     sel = select_model(run, "E_z", SENSORS, families=["mlr"], history=[900.0, 3600.0], cv=3)
     best = sel.best.candidate
     assert (sel.model.input_history_ is not None) == (best.history is not None)
+
+
+def test_the_winner_is_timed_as_the_edge_runs_it(example_run1):
+    run = tr.read_run(example_run1)
+    sel = select_model(run, "E_z", SENSORS, families=["mlr", "svr"], history=[900.0], cv=3)
+    p50, p99 = sel.edge_latency_us
+    assert 0.0 < p50 <= p99 and np.isfinite(p99)
+    assert sel.to_dict()["edge_latency_us"] == {"p50": p50, "p99": p99}
+    assert "winner on the edge" in sel.table()
+    # any run-fitted model can be timed (the figures are measured, not asserted: benches/ compares)
+    assert all(np.isfinite(edge_latency(tr.SVR().fit_run(run, "E_z", SENSORS), run, samples=50)))
+    with pytest.raises(tr.ParameterError, match="fit_run"):
+        edge_latency(tr.MLR().fit(np.ones((5, 2)) * np.arange(5)[:, None], np.arange(5.0)), run)
 
 
 def test_budget_and_bad_input(example_run1):

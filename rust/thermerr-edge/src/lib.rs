@@ -116,6 +116,18 @@ impl Predictor {
         self.0.reset()
     }
 
+    /// Per-sample latency of `n` predictions cycling through `rows` (the core's
+    /// [`thermerr_core::artifact::Predictor::latency`]).
+    pub fn latency(
+        &mut self,
+        rows: &[Vec<f64>],
+        n: usize,
+    ) -> Result<thermerr_core::artifact::Latency> {
+        self.0
+            .latency(rows, n)
+            .map_err(|e| EdgeError::Input(e.to_string()))
+    }
+
     /// Predicts the next sample of the run (one reading per feature, in the model's order).
     /// Models that use past errors (grey, filter models) feed back their own previous output:
     /// closed loop, as a compensating controller runs. Allocates nothing unless it fails.

@@ -19,7 +19,6 @@
 
 use std::io::{BufRead, BufReader, Write};
 use std::process::ExitCode;
-use std::time::Instant;
 
 use thermerr_core::shape::{Shaper, Shaping};
 use thermerr_edge::filter::{Guarded, LineFilter};
@@ -164,22 +163,10 @@ fn latency(p: &mut Predictor, rows: &[Vec<f64>], n: usize) -> ExitCode {
     if rows.is_empty() {
         return fail("no valid rows to time");
     }
-    let mut ns = Vec::with_capacity(n);
-    let mut sink = 0.0;
-    for k in 0..n {
-        let i = k % rows.len();
-        if i == 0 {
-            p.reset();
-        }
-        let t = Instant::now();
-        match p.predict_sample(&rows[i]) {
-            Ok(y) => sink += y,
-            Err(e) => return fail(e),
-        }
-        ns.push(t.elapsed().as_nanos() as f64);
-    }
-    ns.sort_by(f64::total_cmp);
-    let q = |f: f64| ns[((ns.len() - 1) as f64 * f).round() as usize];
+    let lat = match p.latency(rows, n) {
+        Ok(l) => l,
+        Err(e) => return fail(e),
+    };
     let rss_kib = std::fs::read_to_string("/proc/self/status")
         .ok()
         .and_then(|s| {
@@ -189,11 +176,12 @@ fn latency(p: &mut Predictor, rows: &[Vec<f64>], n: usize) -> ExitCode {
         })
         .unwrap_or_else(|| "null".into());
     println!(
-        "{{\"kind\": \"{}\", \"samples\": {n}, \"p50_ns\": {}, \"p99_ns\": {}, \"mean_ns\": {:.1}, \"max_rss_kib\": {rss_kib}, \"checksum\": {sink}}}",
+        "{{\"kind\": \"{}\", \"samples\": {n}, \"p50_ns\": {}, \"p99_ns\": {}, \"mean_ns\": {:.1}, \"max_rss_kib\": {rss_kib}, \"checksum\": {}}}",
         p.kind(),
-        q(0.5),
-        q(0.99),
-        ns.iter().sum::<f64>() / n as f64
+        lat.p50_ns,
+        lat.p99_ns,
+        lat.mean_ns,
+        lat.checksum
     );
     ExitCode::SUCCESS
 }

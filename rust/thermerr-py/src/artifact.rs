@@ -275,6 +275,24 @@ fn predict_guarded<'py>(
     Ok((vec_to_py(py, y), status))
 }
 
+/// Per-sample latency (ns: p50, p99, mean) of `n` predictions of the model file `text` cycling
+/// through the rows of `x` (raw readings), by the core's `Predictor::latency`: the code and the
+/// loop `thermerr-edge --bench-latency` runs.
+#[pyfunction]
+fn sample_latency(
+    py: Python<'_>,
+    text: &str,
+    x: PyReadonlyArray2<'_, f64>,
+    n: usize,
+) -> PyResult<(f64, f64, f64)> {
+    let xs = samples(&x)?;
+    let mut p = thermerr_core::artifact::Predictor::from_json(text).map_err(PyErrWrap)?;
+    let d = xs.ncols();
+    let rows: Vec<&[f64]> = xs.as_slice().chunks_exact(d.max(1)).collect();
+    let lat = crate::detach_short(py, || p.latency(&rows, n))?;
+    Ok((lat.p50_ns, lat.p99_ns, lat.mean_ns))
+}
+
 /// A run's model inputs with temperature history (`thermerr_core::artifact::History`): each
 /// reading, then its rise over each time constant.
 #[pyfunction]
@@ -316,6 +334,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(median_step, m)?)?;
     m.add_function(wrap_pyfunction!(guard_from_training, m)?)?;
     m.add_function(wrap_pyfunction!(predict_guarded, m)?)?;
+    m.add_function(wrap_pyfunction!(sample_latency, m)?)?;
     m.add_class::<PyPreprocessing>()?;
     m.add_function(wrap_pyfunction!(read_model, m)?)?;
     m.add_function(wrap_pyfunction!(write_model, m)?)?;

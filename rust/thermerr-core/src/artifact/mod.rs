@@ -28,7 +28,7 @@ use crate::rbf::RbfModel;
 use crate::svr::SvrModel;
 
 pub use history::{History, HistoryState};
-pub use stream::Predictor;
+pub use stream::{Latency, Predictor};
 
 /// The model-file schema version this crate reads and writes.
 pub const FORMAT_VERSION: u64 = 1;

@@ -149,6 +149,36 @@ impl Predictor {
             || self.artifact.model.sequential()
     }
 
+    /// Times `n` calls of [`Predictor::predict_sample`], cycling through `rows` (one reading per
+    /// feature each) with a reset at the start of every pass: the per-sample latency of the
+    /// model as `thermerr-edge` runs it (one owner for the edge's `--bench-latency` and the
+    /// library's model selection).
+    pub fn latency<R: AsRef<[f64]>>(&mut self, rows: &[R], n: usize) -> Result<Latency> {
+        if rows.is_empty() || n == 0 {
+            return Err(Error::Shape("no rows to time".into()));
+        }
+        let mut ns = Vec::with_capacity(n);
+        let mut checksum = 0.0;
+        for k in 0..n {
+            let i = k % rows.len();
+            if i == 0 {
+                self.reset();
+            }
+            let t = std::time::Instant::now();
+            checksum += self.predict_sample(rows[i].as_ref())?;
+            ns.push(t.elapsed().as_nanos() as f64);
+        }
+        ns.sort_by(f64::total_cmp);
+        let q = |f: f64| ns[((ns.len() - 1) as f64 * f).round() as usize];
+        Ok(Latency {
+            samples: n,
+            p50_ns: q(0.5),
+            p99_ns: q(0.99),
+            mean_ns: ns.iter().sum::<f64>() / n as f64,
+            checksum,
+        })
+    }
+
     /// Forgets the run so far: the next sample starts a new run.
     pub fn reset(&mut self) {
         self.have_first = false;
@@ -228,4 +258,15 @@ impl Predictor {
         self.y1_prev = y1;
         finite(kind, y)
     }
+}
+
+/// Per-sample latency of a [`Predictor`] ([`Predictor::latency`]), in nanoseconds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Latency {
+    pub samples: usize,
+    pub p50_ns: f64,
+    pub p99_ns: f64,
+    pub mean_ns: f64,
+    /// The sum of the predictions, so that the work cannot be optimised away.
+    pub checksum: f64,
 }
