@@ -6,7 +6,15 @@
  *   te_reset(m);                                    // a new run (models on rises or 1-AGO)
  *   te_close(m);
  *
- * te_predict allocates nothing on success. No function lets a Rust panic escape.
+ * Through the file's sensor-fault guard (thermerr fit writes one), raw readings with NaN for a
+ * missing one, as thermerr-edge does:
+ *
+ *   char st[128];
+ *   int rc = te_predict_guarded(m, t_seconds, x, 4, &y, st, sizeof st);
+ *   // TE_OK: y predicted, st "ok" or e.g. "held:T_3"; TE_WAITING: nothing yet ("waiting:T_3")
+ *
+ * te_predict and te_predict_guarded keep separate run state: use one of them for a run.
+ * Neither allocates on success. No function lets a Rust panic escape.
  */
 #ifndef THERMERR_EDGE_H
 #define THERMERR_EDGE_H
@@ -24,10 +32,16 @@ typedef struct TeModel te_model;
 #define TE_ERR_FEATURES (-2) /* the wrong number of features */
 #define TE_ERR_INPUT (-3)    /* a non-finite reading */
 #define TE_ERR_PANIC (-4)    /* an internal error */
+#define TE_ERR_NOGUARD (-5)  /* te_predict_guarded: the model file has no guard */
+#define TE_WAITING 1         /* te_predict_guarded: no prediction yet (a sensor never read well) */
 
 te_model *te_open(const char *path);
 int te_n_features(const te_model *m);
 int te_predict(te_model *m, const double *x, size_t n, double *out);
+int te_has_guard(const te_model *m);
+/* t: seconds (NaN: row count times the guard's step); status: NULL or status_len bytes */
+int te_predict_guarded(te_model *m, double t, const double *x, size_t n, double *out,
+                       char *status, size_t status_len);
 void te_reset(te_model *m);
 void te_close(te_model *m);
 const char *te_last_error(void);

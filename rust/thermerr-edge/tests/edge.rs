@@ -185,14 +185,13 @@ fn binary_streams_predictions_and_skips_bad_rows() {
     let _ = std::fs::remove_file(&path);
 }
 
-#[test]
-fn c_program_prints_the_same_numbers() {
-    let gcc = Command::new("gcc").arg("--version").output();
-    if gcc.is_err() {
+/// Compiles `tests/c/NAME.c` against the staticlib cargo built next to this test's binary;
+/// `None` (the test skipped, said on stderr) without gcc.
+fn compile_c(name: &str) -> Option<PathBuf> {
+    if Command::new("gcc").arg("--version").output().is_err() {
         eprintln!("gcc not found: C ABI test skipped");
-        return;
+        return None;
     }
-    // the staticlib cargo built next to this test's binary
     let dir = exe().parent().unwrap().to_path_buf();
     let lib = [
         dir.join("libthermerr_edge.a"),
@@ -202,9 +201,9 @@ fn c_program_prints_the_same_numbers() {
     .find(|p| p.exists())
     .expect("cargo builds the staticlib with the tests");
     let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let bin = std::env::temp_dir().join(format!("te_demo_{}", std::process::id()));
+    let bin = std::env::temp_dir().join(format!("te_{name}_{}", std::process::id()));
     let st = Command::new("gcc")
-        .arg(manifest.join("tests/c/demo.c"))
+        .arg(manifest.join(format!("tests/c/{name}.c")))
         .arg("-I")
         .arg(manifest.join("include"))
         .arg(&lib)
@@ -213,6 +212,94 @@ fn c_program_prints_the_same_numbers() {
         .status()
         .unwrap();
     assert!(st.success());
+    Some(bin)
+}
+
+#[test]
+fn c_program_through_the_guard_prints_what_the_edge_does() {
+    let Some(bin) = compile_c("guarded") else {
+        return;
+    };
+    // y = 2·a + 3·b + 1, a guard holding for 10 s, a fallback without T_b: y = 4·a + 1
+    let lim = serde_json::json!({"min": 0.0, "max": 100.0, "max_rate": 1.0, "stuck_s": 50.0});
+    let mlr = |f: &[&str], c: &[f64]| {
+        serde_json::json!({"format_version": 1, "kind": "mlr", "n_features": f.len(),
+            "features": f, "target": "E_x", "inputs": "absolute",
+            "model": {"coef": c, "intercept": 1.0}})
+    };
+    let mut model = mlr(&["T_a", "T_b"], &[2.0, 3.0]);
+    model["guard"] = serde_json::json!({"sensors": [lim, lim], "hold_s": 10.0, "step_s": 1.0,
+        "fallbacks": [{"without": "T_b", "model": mlr(&["T_a"], &[4.0])}]});
+    let path = std::env::temp_dir().join(format!("te_guarded_{}.json", std::process::id()));
+    std::fs::write(&path, model.to_string()).unwrap();
+    let mut rows = vec![(0.0, [f64::NAN, 30.0]), (1.0, [20.0, 30.0])];
+    rows.extend((2..=14).map(|t| (t as f64, [20.5, f64::NAN])));
+    rows.push((15.0, [20.5, 30.5]));
+    let input: String = rows
+        .iter()
+        .map(|(t, x)| format!("{t} {} {}\n", x[0], x[1]))
+        .collect();
+    let mut child = Command::new(&bin)
+        .arg(&path)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    use std::io::Write;
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(input.as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // the same rows through the library's guard
+    let mut g = Predictor::load(&path).unwrap().guarded().unwrap().unwrap();
+    let want: Vec<String> = rows
+        .iter()
+        .map(|(t, x)| {
+            let y = g.step(Some(*t), x).unwrap();
+            let mut st = String::new();
+            g.write_status(&mut st).unwrap();
+            match y {
+                Some(v) => format!("{v:?} {st}"),
+                None => format!("- {st}"),
+            }
+        })
+        .collect();
+    let got: Vec<String> = String::from_utf8(out.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            // %.17g prints 62 where {:?} prints 62.0: compare the numbers, then the status
+            let (y, st) = l.split_once(' ').unwrap();
+            match y.parse::<f64>() {
+                Ok(v) => format!("{v:?} {st}"),
+                Err(_) => l.to_string(),
+            }
+        })
+        .collect();
+    assert_eq!(got, want);
+    assert_eq!(want[0], "- waiting:T_a");
+    assert!(want.iter().any(|l| l.ends_with(" held:T_b")));
+    assert!(want.iter().any(|l| l.ends_with(" fallback:T_b")));
+    assert!(want.last().unwrap().ends_with(" ok"));
+    // the 8-byte buffer: "waiting:T_a;waiting:T_b" cut to 7 bytes and a NUL
+    assert_eq!(String::from_utf8_lossy(&out.stderr).trim(), "waiting");
+    let _ = std::fs::remove_file(&path);
+}
+
+#[test]
+fn c_program_prints_the_same_numbers() {
+    let Some(bin) = compile_c("demo") else {
+        return;
+    };
     let (names, rows) = run();
     let model = fixtures().join("svr_rise.json");
     let p = Predictor::load(&model).unwrap();
