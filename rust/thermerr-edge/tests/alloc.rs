@@ -1,18 +1,33 @@
-//! The hot path allocates nothing: a counting global allocator around `predict_sample` for every
-//! model kind and preprocessing in the fixtures.
+//! The hot path allocates nothing: a counting global allocator (per thread) around
+//! `predict_sample` for every model kind and preprocessing in the fixtures, and around the C
+//! ABI's `te_predict_guarded` through hold and fallback.
 
 use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
 use std::path::Path;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use thermerr_edge::Predictor;
 
 struct Counting;
-static ALLOCS: AtomicUsize = AtomicUsize::new(0);
+
+thread_local! {
+    /// Allocations made by this thread: the test harness and the other tests run on threads of
+    /// their own, so only the hot path under test counts (const, no destructor: usable inside
+    /// the allocator).
+    static ALLOCS: Cell<usize> = const { Cell::new(0) };
+}
+
+fn count() {
+    let _ = ALLOCS.try_with(|c| c.set(c.get() + 1));
+}
+
+fn allocs() -> usize {
+    ALLOCS.with(Cell::get)
+}
 
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, l: Layout) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::SeqCst);
+        count();
         // SAFETY: forwarding the caller's layout to the system allocator
         unsafe { System.alloc(l) }
     }
@@ -21,7 +36,7 @@ unsafe impl GlobalAlloc for Counting {
         unsafe { System.dealloc(p, l) }
     }
     unsafe fn realloc(&self, p: *mut u8, l: Layout, n: usize) -> *mut u8 {
-        ALLOCS.fetch_add(1, Ordering::SeqCst);
+        count();
         // SAFETY: as above
         unsafe { System.realloc(p, l, n) }
     }
@@ -47,14 +62,54 @@ fn predict_sample_allocates_nothing() {
             })
             .collect();
         let mut sum = 0.0;
-        let before = ALLOCS.load(Ordering::SeqCst);
+        let before = allocs();
         for x in &xs {
             sum += p.predict_sample(x).unwrap();
         }
         p.reset();
         sum += p.predict_sample(&xs[0]).unwrap();
-        let after = ALLOCS.load(Ordering::SeqCst);
+        let after = allocs();
         assert_eq!(after - before, 0, "{name} allocated");
         assert!(sum.is_finite());
     }
+}
+
+#[test]
+fn the_guarded_c_call_allocates_nothing() {
+    use thermerr_edge::capi::{te_close, te_open, te_predict_guarded, TE_OK};
+    let lim = serde_json::json!({"min": 0.0, "max": 100.0, "max_rate": 1.0, "stuck_s": 50.0});
+    let mlr = |f: &[&str], c: &[f64]| {
+        serde_json::json!({"format_version": 1, "kind": "mlr", "n_features": f.len(),
+            "features": f, "target": "E_x", "inputs": "rise",
+            "model": {"coef": c, "intercept": 1.0}})
+    };
+    let mut model = mlr(&["T_a", "T_b"], &[2.0, 3.0]);
+    model["guard"] = serde_json::json!({"sensors": [lim, lim], "hold_s": 5.0, "step_s": 1.0,
+        "fallbacks": [{"without": "T_b", "model": mlr(&["T_a"], &[4.0])}]});
+    let path = std::env::temp_dir().join(format!("te_alloc_{}.json", std::process::id()));
+    std::fs::write(&path, model.to_string()).unwrap();
+    let c_path = std::ffi::CString::new(path.to_str().unwrap()).unwrap();
+    // SAFETY: a NUL-terminated path; the model is closed once below
+    let m = unsafe { te_open(c_path.as_ptr()) };
+    assert!(!m.is_null());
+    let mut status = [0 as std::ffi::c_char; 64];
+    let mut y = 0.0;
+    let before = allocs();
+    for k in 0..40 {
+        // T_b missing from row 10 on: ok, then held, then its fallback
+        let x = [20.0 + 0.1 * k as f64, if k < 10 { 30.0 } else { f64::NAN }];
+        // SAFETY: two readings, one output, a 64-byte status buffer
+        let rc = unsafe {
+            te_predict_guarded(m, k as f64, x.as_ptr(), 2, &mut y, status.as_mut_ptr(), 64)
+        };
+        assert_eq!(rc, TE_OK);
+    }
+    let after = allocs();
+    // SAFETY: the status is NUL-terminated
+    let st = unsafe { std::ffi::CStr::from_ptr(status.as_ptr()) };
+    assert_eq!(st.to_str().unwrap(), "fallback:T_b");
+    assert_eq!(after - before, 0, "te_predict_guarded allocated");
+    // SAFETY: opened above, closed once
+    unsafe { te_close(m) };
+    let _ = std::fs::remove_file(&path);
 }
