@@ -58,6 +58,9 @@ def test_the_winner_is_timed_as_the_edge_runs_it(example_run1):
     assert 0.0 < p50 <= p99 and np.isfinite(p99)
     assert sel.to_dict()["edge_latency_us"] == {"p50": p50, "p99": p99}
     assert "winner on the edge" in sel.table()
+    # every candidate timed the edge's way too (its last split's model on its inputs)
+    assert all(np.isfinite(e.edge_us) and e.edge_us > 0 for e in sel.leaderboard)
+    assert all("edge_us_per_sample" in row for row in sel.to_dict()["leaderboard"])
     # any run-fitted model can be timed (the figures are measured, not asserted: benches/ compares)
     assert all(np.isfinite(edge_latency(tr.SVR().fit_run(run, "E_z", SENSORS), run, samples=50)))
     with pytest.raises(tr.ParameterError, match="fit_run"):
