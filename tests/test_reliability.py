@@ -48,10 +48,26 @@ def test_a_failed_write_leaves_the_previous_set_whole(tmp_path, monkeypatch):
         real(path, data, mode)
 
     monkeypatch.setattr(_io, "_write_file", failing)
-    with pytest.raises(OSError):
+    with pytest.raises(OSError) as full:
         _io.write_set(out, {k: v + "-new" for k, v in SET.items()})
     assert {p.name: p.read_text() for p in out.iterdir()} == SET
     assert [p.name for p in tmp_path.iterdir()] == ["diag"]  # no temporary left behind
+    # a failed write names no file (os.write); the error names the output, for the one line
+    assert full.value.errno == 28 and full.value.filename == str(out)
+
+
+def test_a_full_disk_is_one_line_naming_the_output(example_run1, tmp_path, monkeypatch, capsys):
+    from thermerr_rs.cli import main
+
+    def full(path, data, mode):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(_io, "_write_file", full)
+    out = tmp_path / "m.json"
+    rc = main(["fit", str(example_run1), "--axis", "E_z", "--no-guard", "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err
+    assert rc == 1 and err.count("\n") == 1 and str(out) in err and "No space left on device" in err
+    assert list(tmp_path.iterdir()) == []  # nothing half-written
 
 
 def test_an_interrupted_write_leaves_the_previous_set_whole(tmp_path, monkeypatch):

@@ -103,6 +103,16 @@ def _parent(target: Path) -> Path:
     return target.parent if str(target.parent) else Path(".")
 
 
+def _naming(e: OSError, target: Path) -> OSError:
+    """``e`` with the output's name when it has none (a full disk fails a write, not an open,
+    and ``os.write`` names no file): the one line the user reads says which output failed."""
+    if e.filename is None and e.errno is not None:
+        named = OSError(e.errno, e.strerror, str(target))
+        named.__cause__ = e
+        return named
+    return e
+
+
 def write_atomic(path: str | os.PathLike[str], data: str | bytes) -> Path:
     """Write ``data`` to a temporary file beside ``path``, then rename it into place."""
     target = Path(path)
@@ -115,11 +125,13 @@ def write_atomic(path: str | os.PathLike[str], data: str | bytes) -> Path:
         os.unlink(tmp)
         _write_file(Path(tmp), data, _file_mode())
         os.replace(tmp, target)
-    except BaseException:
+    except BaseException as e:
         try:
             os.unlink(tmp)
         except FileNotFoundError:
             pass
+        if isinstance(e, OSError):
+            raise _naming(e, target) from e
         raise
     return target
 
@@ -160,11 +172,13 @@ def write_set(out_dir: str | os.PathLike[str], files: Mapping[str, str | bytes])
             os.rename(target, old)
         os.rename(tmp, target)
         _fsync_dir(parent)
-    except BaseException:
+    except BaseException as e:
         if old is not None and not target.exists():
             os.rename(old, target)  # put the previous set back
             old = None
         shutil.rmtree(tmp, ignore_errors=True)
+        if isinstance(e, OSError):
+            raise _naming(e, target) from e
         raise
     finally:
         if old is not None:
