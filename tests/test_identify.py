@@ -237,9 +237,18 @@ def test_the_report_says_the_network_was_identified(tmp_path):
     assert "identified from data" in page and page.count("<svg") == 1
     for n in m.nodes:
         assert f">{n}</text>" in page, n
+    assert "or an unexplained remainder, may also be a shortcoming" in page
+    assert str(d).endswith("or a network written from the drawings")  # the printed result says it too
     nominal = diagnose(train, Machine.from_toml(c.nominal_toml()), test)
     assert nominal.report["identified"] is False and "identification" not in nominal.report
     assert "identified from data" not in Path(nominal.write(tmp_path / "nom")).read_text()
+    assert "identified" not in str(nominal)
+    # several axes: the summary page and the printed result carry it once
+    from thermerr_rs.thermal import diagnose_axes
+
+    both = diagnose_axes(train, m, test)
+    assert str(both).count("note: the network was identified") == 1
+    assert "identified from data" in Path(both.write(tmp_path / "axes")).read_text()
 
 
 def test_an_unknown_key_in_the_identified_table_is_one_line():

@@ -258,8 +258,7 @@ def render_html(report: dict[str, Any], series: dict[str, Any], network: dict[st
         f"<p>The network was <b>identified from data</b> by <code>thermerr init</code> from "
         f"<code>{esc(str(ident_info['source']))}</code> ({ident_info['train_rows']} training rows, "
         f"{ident_info['holdout_rows']} held out; ambient rule: {esc(str(ident_info['ambient_rule']))}; "
-        f"nodes: {esc(str(ident_info['node_rule']))}), not written by a person: a cause named here may "
-        "also be a shortcoming of the identified network.</p>")
+        f"nodes: {esc(str(ident_info['node_rule']))}), {esc(IDENTIFIED_CAVEAT)}</p>")
     return f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>thermerr diagnosis: {esc(verdict)}</title>
 <style>body{{font-family:system-ui,sans-serif;max-width:980px;margin:2em auto;padding:0 1em;color:#222}}
@@ -309,6 +308,14 @@ def write_report(
     return out / "report.html"
 
 
+#: what a diagnosis says when its network came from ``thermerr init`` (the page, the summary
+#: page and the printed result)
+IDENTIFIED_CAVEAT = (
+    "not written by a person: a cause named here, or an unexplained remainder, may also be a "
+    "shortcoming of the identified network (its node count, its links, its sensors); compare with "
+    "thermerr init --nodes N or a network written from the drawings")
+
+
 def render_axes_html(summary: dict[str, Any]) -> str:
     """The summary page of a diagnosis of several axes: a row per axis, linking its own page."""
     esc = html.escape
@@ -327,7 +334,10 @@ def render_axes_html(summary: dict[str, Any]) -> str:
         "<style>body{font-family:sans-serif;margin:2em}td,th{padding:.3em .8em;text-align:left}</style>"
         f"</head><body><h1>Diagnosis of {len(summary['axes'])} axes</h1>"
         f"<p>run <code>{esc(summary['run'])}</code>, machine <code>{esc(summary['machine'])}</code>; "
-        "every figure on held-out data</p><table><tr><th>axis</th><th>verdict</th><th>causes</th>"
+        "every figure on held-out data</p>"
+        + (f"<p>The network was <b>identified from data</b> by <code>thermerr init</code>, "
+           f"{esc(IDENTIFIED_CAVEAT)}</p>" if summary.get("identified") else "")
+        + "<table><tr><th>axis</th><th>verdict</th><th>causes</th>"
         "<th>baseline RMS (µm)</th><th>extended RMS (µm)</th><th>gain (%)</th>"
         "<th>unexplained remainder (µm)</th></tr>" + "".join(rows) + "</table></body></html>\n")
 

@@ -196,6 +196,9 @@ class Diagnosis:
                             self.extended.to_dict())
 
     def __str__(self) -> str:
+        return self._text() + (_identified_line() if self.report.get("identified") else "")
+
+    def _text(self) -> str:
         b, e = self.report["baseline"], self.report["extended"]
         col = f" (column {self.column})" if self.column else ""
         more = ""
@@ -205,6 +208,12 @@ class Diagnosis:
             more += f"unexplained remainder: {self.remainder_um:.3f} µm RMS above the probe noise\n"
         return (f"verdict: {self.verdict}{col}\n{self.evidence}\n{more}"
                 f"held-out RMS: baseline {b['rmse_um']:.3f} µm, extended {e['rmse_um']:.3f} µm, gain {self.gain_pct:.1f} %")
+
+
+def _identified_line() -> str:
+    from .report import IDENTIFIED_CAVEAT
+
+    return f"\nnote: the network was identified from data (thermerr init), {IDENTIFIED_CAVEAT}"
 
 
 @contextmanager
@@ -305,7 +314,8 @@ class AxesDiagnosis:
         })
 
     def __str__(self) -> str:
-        return "\n\n".join(f"== {a} ==\n{d}" for a, d in self.by_axis.items())
+        text = "\n\n".join(f"== {a} ==\n{d._text()}" for a, d in self.by_axis.items())
+        return text + (_identified_line() if self.report["identified"] else "")
 
 
 def diagnose_axes(run: Run, machine: Machine, holdout: Run | None = None, *, axes: list[str] | None = None,
