@@ -116,3 +116,22 @@ def test_examples_are_shipped_with_the_package(tmp_path):
     assert (tmp_path / "ex" / "vmc_run.csv").read_bytes() == tr.examples.path("vmc_run.csv").read_bytes()
     run = tr.read_run(tmp_path / "ex" / "hmc_run1.csv")
     assert len(run) > 100 and "E_z" in run.names
+
+
+def test_the_command_line_and_a_diagnosis_start_without_scikit_learn(tmp_path):
+    """Importing scikit-learn takes about a second; the package imports its estimators (which
+    build on scikit-learn's base classes) on first use, so `thermerr --help`, `init` and
+    `diagnose`, and `tr.diagnose` in Python, never import it."""
+    code = (
+        "import sys, thermerr_rs as tr\n"
+        "from thermerr_rs.cli import main\n"
+        "assert main(['examples', sys.argv[1]]) == 0\n"
+        "assert main(['diagnose', sys.argv[1] + '/vmc_run.csv', '--machine', sys.argv[1] + '/vmc_nominal.toml',"
+        " '--out', sys.argv[1] + '/d', '--quiet']) == 0\n"
+        "assert 'sklearn' not in sys.modules, 'scikit-learn was imported'\n"
+        "tr.MLR  # an estimator imports it\n"
+        "assert 'sklearn' in sys.modules\n"
+    )
+    res = subprocess.run([sys.executable, "-c", code, str(tmp_path / "ex")], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+

@@ -10,8 +10,6 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from scipy.sparse import issparse
-from sklearn.exceptions import DataConversionWarning
 
 from .errors import DataError, DataTypeError, ShapeError
 
@@ -20,6 +18,8 @@ F64 = npt.NDArray[np.float64]
 
 def _float_array(x: Any, name: str) -> npt.NDArray[np.float64]:
     """``x`` as a float64 array of any shape; sparse, complex and non-numeric input refused."""
+    from scipy.sparse import issparse  # here, not at import: a diagnosis never needs it
+
     if issparse(x):
         raise DataTypeError(
             f"{name} is a sparse matrix, but dense data is required: use {name}.toarray()"
@@ -93,6 +93,8 @@ def as_target(y: Any, n: int, estimator: str) -> F64:
         raise ShapeError(f"{estimator} requires y to be passed, but the target y is None")
     arr = _float_array(y, "y")
     if arr.ndim == 2 and arr.shape[1] == 1:
+        from sklearn.exceptions import DataConversionWarning
+
         warnings.warn(
             "A column-vector y was passed when a 1d array was expected. Please change the shape "
             "of y to (n_samples,), for example using ravel().",

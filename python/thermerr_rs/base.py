@@ -336,6 +336,12 @@ def run_inputs(run: Any, features: list[str], inputs: str, history: dict[str, An
     return x
 
 
+def _import_families() -> None:
+    """Define every estimator class, so that each ``kind`` and preprocessing is registered (the
+    package imports them on first use, not at its own import)."""
+    from . import fcm, grey, hybrid, linear, preprocessing, rbf, svr  # noqa: F401
+
+
 def _from_dict(doc: Any, expect: type[Estimator] | None = None) -> Estimator:
     if not isinstance(doc, dict):
         raise ModelFormatError("a model file holds a JSON object")
@@ -351,6 +357,7 @@ def _from_text(text: str, expect: type[Estimator] | None = None) -> Estimator:
     hands back the fitted model; this picks the estimator class of its ``kind``."""
     kind, n_features, header_json, fitted = _core.read_model(text)
     header = json.loads(header_json)
+    _import_families()
     cls = _REGISTRY.get(kind)
     if cls is None:
         raise ModelFormatError(f"unknown model kind {kind!r} (known: {sorted(_REGISTRY)})")

@@ -26,15 +26,18 @@ import os
 import sys
 import time
 from collections.abc import Sequence
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from . import __version__
-from .base import Estimator, load_model
 from .errors import ConvergenceError, NumericalError, ThermerrError
-from .linear import MLR
 from .metrics import Scores, scores
-from .pipeline import MinMaxScaled
 from .run import Run, read_run
+
+if TYPE_CHECKING:
+    from .base import Estimator
+
+# The estimators (and scikit-learn, whose import takes about a second) are imported by the
+# commands that use them, not at start: `thermerr diagnose`, `init` or `--help` never need them.
 
 
 def _progress_enabled(args: argparse.Namespace) -> bool:
@@ -169,6 +172,8 @@ def _make_svr(args: argparse.Namespace, run: Run, sensors: list[str]) -> Estimat
 def _make_model(args: argparse.Namespace, n_train: int) -> Estimator:
     hidden = {} if args.hidden is None else {"hidden": args.hidden}  # else each family's default
     if args.model == "mlr":
+        from .linear import MLR
+
         return MLR(alpha=args.alpha)
     if args.model in ("greybp", "gm1n", "bp"):
         from .grey import GM1N, BPNetwork, GreyBP
@@ -195,6 +200,8 @@ def _make_model(args: argparse.Namespace, n_train: int) -> Estimator:
         n_centers=args.n_centers,
         seed=args.seed,
     )
+    from .pipeline import MinMaxScaled
+
     return MinMaxScaled(rbf)
 
 
@@ -285,6 +292,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
 
 
 def cmd_evaluate(args: argparse.Namespace) -> int:
+    from .base import Estimator, load_model
+
     model = load_model(args.model)
     run = _read(args, args.run)
     target = args.axis or model.target_name_
@@ -422,6 +431,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
 
 
 def cmd_stiffness(args: argparse.Namespace) -> int:
+    from .base import load_model
     from .stiffness import key_thermal_stiffness
 
     model = load_model(args.model)

@@ -6,7 +6,7 @@ Every class derives from :class:`ThermerrError` *and* from the builtin a caller 
 
 from __future__ import annotations
 
-from sklearn.exceptions import NotFittedError as _SklearnNotFittedError
+from typing import TYPE_CHECKING, Any
 
 
 class ThermerrError(Exception):
@@ -45,9 +45,34 @@ class ConvergenceError(ThermerrError, RuntimeError):
     """An iterative method did not meet its tolerance."""
 
 
-class NotFittedError(ThermerrError, _SklearnNotFittedError):
-    """A model was used before ``fit``. Also scikit-learn's ``NotFittedError`` (itself a
-    ``ValueError`` and an ``AttributeError``), so scikit-learn's tools recognise it."""
+if TYPE_CHECKING:
+    from sklearn.exceptions import NotFittedError as _SklearnNotFittedError
+
+    class NotFittedError(ThermerrError, _SklearnNotFittedError):
+        """A model was used before ``fit``."""
+
+
+def _not_fitted_error() -> type:
+    from sklearn.exceptions import NotFittedError as _SklearnNotFittedError
+
+    class NotFittedError(ThermerrError, _SklearnNotFittedError):
+        """A model was used before ``fit``. Also scikit-learn's ``NotFittedError`` (itself a
+        ``ValueError`` and an ``AttributeError``), so scikit-learn's tools recognise it."""
+
+    NotFittedError.__module__ = __name__
+    NotFittedError.__qualname__ = "NotFittedError"
+    return NotFittedError
+
+
+def __getattr__(name: str) -> Any:
+    # NotFittedError derives from scikit-learn's, whose import takes about a second; it is
+    # made on first use, so that a command that never needs scikit-learn (a diagnosis, the
+    # command line's start) does not import it
+    if name == "NotFittedError":
+        cls = _not_fitted_error()
+        globals()[name] = cls
+        return cls
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 class ModelFormatError(ThermerrError, ValueError):
