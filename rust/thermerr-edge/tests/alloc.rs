@@ -8,6 +8,8 @@ use std::path::Path;
 
 use thermerr_edge::Predictor;
 
+mod common;
+
 struct Counting;
 
 thread_local! {
@@ -77,15 +79,7 @@ fn predict_sample_allocates_nothing() {
 #[test]
 fn the_guarded_c_call_allocates_nothing() {
     use thermerr_edge::capi::{te_close, te_open, te_predict_guarded, TE_OK};
-    let lim = serde_json::json!({"min": 0.0, "max": 100.0, "max_rate": 1.0, "stuck_s": 50.0});
-    let mlr = |f: &[&str], c: &[f64]| {
-        serde_json::json!({"format_version": 1, "kind": "mlr", "n_features": f.len(),
-            "features": f, "target": "E_x", "inputs": "rise",
-            "model": {"coef": c, "intercept": 1.0}})
-    };
-    let mut model = mlr(&["T_a", "T_b"], &[2.0, 3.0]);
-    model["guard"] = serde_json::json!({"sensors": [lim, lim], "hold_s": 5.0, "step_s": 1.0,
-        "fallbacks": [{"without": "T_b", "model": mlr(&["T_a"], &[4.0])}]});
+    let model = common::guarded_mlr("rise", 5.0);
     let path = std::env::temp_dir().join(format!("te_alloc_{}.json", std::process::id()));
     std::fs::write(&path, model.to_string()).unwrap();
     let c_path = std::ffi::CString::new(path.to_str().unwrap()).unwrap();

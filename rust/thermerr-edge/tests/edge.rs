@@ -7,6 +7,8 @@ use std::process::Command;
 
 use thermerr_edge::{EdgeError, Predictor};
 
+mod common;
+
 fn fixtures() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../tests/fixtures")
 }
@@ -215,21 +217,32 @@ fn compile_c(name: &str) -> Option<PathBuf> {
     Some(bin)
 }
 
+/// Runs a compiled C test program on `model` with `input` on its stdin.
+fn run_c(bin: &Path, model: &Path, input: &str) -> std::process::Output {
+    use std::io::Write;
+    let mut child = Command::new(bin)
+        .arg(model)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(input.as_bytes())
+        .unwrap();
+    child.wait_with_output().unwrap()
+}
+
 #[test]
 fn c_program_through_the_guard_prints_what_the_edge_does() {
     let Some(bin) = compile_c("guarded") else {
         return;
     };
     // y = 2·a + 3·b + 1, a guard holding for 10 s, a fallback without T_b: y = 4·a + 1
-    let lim = serde_json::json!({"min": 0.0, "max": 100.0, "max_rate": 1.0, "stuck_s": 50.0});
-    let mlr = |f: &[&str], c: &[f64]| {
-        serde_json::json!({"format_version": 1, "kind": "mlr", "n_features": f.len(),
-            "features": f, "target": "E_x", "inputs": "absolute",
-            "model": {"coef": c, "intercept": 1.0}})
-    };
-    let mut model = mlr(&["T_a", "T_b"], &[2.0, 3.0]);
-    model["guard"] = serde_json::json!({"sensors": [lim, lim], "hold_s": 10.0, "step_s": 1.0,
-        "fallbacks": [{"without": "T_b", "model": mlr(&["T_a"], &[4.0])}]});
+    let model = common::guarded_mlr("absolute", 10.0);
     let path = std::env::temp_dir().join(format!("te_guarded_{}.json", std::process::id()));
     std::fs::write(&path, model.to_string()).unwrap();
     let mut rows = vec![(0.0, [f64::NAN, 30.0]), (1.0, [20.0, 30.0])];
@@ -239,21 +252,7 @@ fn c_program_through_the_guard_prints_what_the_edge_does() {
         .iter()
         .map(|(t, x)| format!("{t} {} {}\n", x[0], x[1]))
         .collect();
-    let mut child = Command::new(&bin)
-        .arg(&path)
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    use std::io::Write;
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(input.as_bytes())
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
+    let out = run_c(&bin, &path, &input);
     assert!(
         out.status.success(),
         "{}",
@@ -319,20 +318,7 @@ fn c_program_prints_the_same_numbers() {
                 + "\n"
         })
         .collect();
-    let mut child = Command::new(&bin)
-        .arg(&model)
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    use std::io::Write;
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(input.as_bytes())
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
+    let out = run_c(&bin, &model, &input);
     assert!(out.status.success());
     let got: Vec<f64> = String::from_utf8(out.stdout)
         .unwrap()
