@@ -5,7 +5,18 @@ mealpy's "CSO" is cat swarm, another method) driving scikit-learn's SVR through
 `cross_val_score` on the same folds, same population, generations and bounds. The note gives the
 CV MSE each reached (different random streams: compare the values, not the points).
 
-pymetaheuristic is optional (``pip install ".[bench]"``); without it the row says so."""
+pymetaheuristic is optional (``pip install ".[bench]"``); without it the row says so.
+
+``python benches/bench_tune.py --shop`` runs the same budget at a real size (issue 12 point 4):
+the shipped shop run's training rows (``make_shop_case(1)``, first 60 % = 6 624 rows × 16
+temperature rises, target ``E_ch1``), 5 time-ordered folds, the seed's bounds C ∈ [0.1, 100],
+γ ∈ [1e-3, 1]. Ours twice: the plain search (``warm_start=False``: the same path, bit for bit, as
+fitting every fold of every point) and with warm starts. The references would take hours, so
+their time is extrapolated, and said to be: scikit-learn's 5-fold ``cross_val_score`` timed at
+``SAMPLE`` points drawn uniformly in the log box plus the search's optimum, times the search's
+2 020 evaluations (pymetaheuristic's ``chicken_so`` adds nothing measurable to that);
+``GridSearchCV(n_jobs=2)`` timed on a 3 × 3 grid of the box, per point, times 2 020. About
+40 minutes on 2 cores."""
 
 from __future__ import annotations
 
@@ -63,3 +74,69 @@ def rows(sizes=SIZES, repeat: int = 3) -> list[dict]:
             f"({r.evaluations} evals)")
     return [dict(task="CSO-SVR search (pop 20 x 100)", size="45 x 4, 5-fold", ours_s=t_ours, ref_s=t_ref,
                  ratio=t_ref / t_ours, note=note)]
+
+
+SAMPLE = 6
+
+
+def shop_rows() -> list[dict]:
+    """The seed-004 budget on the shop run's training rows (see the module docstring)."""
+    import sys
+    import time
+    from pathlib import Path
+
+    import thermerr_rs as tr
+
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from shop_benchmark import FEATURES, shop_run, split
+
+    run = shop_run()
+    rows, _ = split(len(run))
+    x = run.matrix(FEATURES)
+    x = (x - x[0])[rows]
+    y = run["E_ch1"][rows]
+    bounds = {"C": (0.1, 100.0), "gamma": (1e-3, 1.0)}
+    size = f"{x.shape[0]} x {x.shape[1]}, 5 time folds"
+    out, res = [], {}
+    for warm in (False, True):
+        t0 = time.perf_counter()
+        res[warm] = r = tr.tune_svr(x, y, bounds=bounds, pop=20, iters=100, seed=0, progress=False, warm_start=warm)
+        res[warm, "t"] = time.perf_counter() - t0
+        print(f"ours warm_start={warm}: {res[warm, 't']:.0f} s, C {r.C:.6g} gamma {r.gamma:.6g} CV MSE {r.cv_mse:.6g}, "
+              f"{r.n_fits} of {r.n_evals * 5} fold fits", flush=True)
+    from sklearn.model_selection import GridSearchCV, TimeSeriesSplit, cross_val_score
+    from sklearn.svm import SVR
+
+    cv = TimeSeriesSplit(5)
+    rng = np.random.default_rng(0)
+    pts = [(10 ** rng.uniform(-1, 2), 10 ** rng.uniform(-3, 0)) for _ in range(SAMPLE)] + [(res[False].C, res[False].gamma)]
+    t0 = time.perf_counter()
+    for c, g in pts:
+        cross_val_score(SVR(C=c, gamma=g), x, y, cv=cv, scoring="neg_mean_squared_error")
+    per_eval = (time.perf_counter() - t0) / len(pts)
+    grid = {"C": np.logspace(-1, 2, 3), "gamma": np.logspace(-3, 0, 3)}
+    t0 = time.perf_counter()
+    GridSearchCV(SVR(), grid, cv=cv, scoring="neg_mean_squared_error", n_jobs=2).fit(x, y)
+    per_grid = (time.perf_counter() - t0) / 9
+    n = res[False].n_evals
+    for warm, label in ((False, "plain"), (True, "warm starts")):
+        r, t = res[warm], res[warm, "t"]
+        note = f"CV MSE {r.cv_mse:.6g}; {r.n_fits} of {n * 5} fold fits"
+        out.append(dict(task=f"CSO-SVR search, {label} vs sklearn cross_val_score x {n} (extrapolated)", size=size,
+                        ours_s=t, ref_s=per_eval * n, ratio=per_eval * n / t,
+                        note=note + f"; sklearn {per_eval:.2f} s per 5-fold evaluation, mean of {len(pts)} points"))
+        out.append(dict(task=f"CSO-SVR search, {label} vs GridSearchCV(n_jobs=2) x {n} (extrapolated)", size=size,
+                        ours_s=t, ref_s=per_grid * n, ratio=per_grid * n / t,
+                        note=note + f"; GridSearchCV {per_grid:.2f} s per point on a 3 x 3 grid"))
+    return out
+
+
+if __name__ == "__main__":
+    import argparse
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--shop", action="store_true", help="the seed-004 budget on the shop run (about 40 min)")
+    args = ap.parse_args()
+    for row in (shop_rows() if args.shop else rows()):
+        print(f"{row['task']:<70} {row['size']:<26} ours {row['ours_s']:8.2f} s  ref {row['ref_s']:9.2f} s  "
+              f"x{row['ratio']:.1f}  {row['note']}")

@@ -103,6 +103,34 @@ def test_tune_svr_improves_on_defaults_and_is_deterministic(method: str) -> None
     assert len(res.history) == 20 and res.n_evals == 10 * 21  # initial population + 20 generations
 
 
+def test_the_pruned_search_is_the_plain_search() -> None:
+    """tune_svr stops a point once its first folds rule it out and fits no (point, fold) twice;
+    the swarm only asks whether a point beats its member's memory, so the result must be the
+    plain search's: CSO driving the full CV MSE of every point, bit for bit."""
+    x, y = seed004_like(90, seed=3)
+    bounds = {"C": (0.1, 100.0), "gamma": (1e-3, 1.0)}
+    res = tr.tune_svr(x, y, cv=4, bounds=bounds, pop=8, iters=12, seed=5, progress=False)
+    lo, hi = np.log10([0.1, 1e-3]), np.log10([100.0, 1.0])
+
+    def full(v: np.ndarray) -> float:
+        return tr.svr_cv_mse(x, y, res.folds, C=10 ** v[0], gamma=10 ** v[1])
+
+    plain = tr.cso(full, list(zip(lo, hi)), pop=8, iters=12, seed=5)
+    assert (res.C, res.gamma, res.cv_mse) == (10 ** plain.x[0], 10 ** plain.x[1], plain.fun)
+    assert np.array_equal(res.history, plain.history)
+    assert res.n_fits < res.n_evals * 4
+
+
+def test_warm_started_search_reports_the_cold_objective_and_is_deterministic() -> None:
+    x, y = seed004_like(90, seed=3)
+    kw = dict(cv=4, bounds={"C": (0.1, 100.0), "gamma": (1e-3, 1.0)}, pop=8, iters=12, seed=5, progress=False)
+    warm = tr.tune_svr(x, y, warm_start=True, **kw)
+    # its CV MSE is the objective at its point with cold solvers, as anyone recomputes it
+    assert warm.cv_mse == tr.svr_cv_mse(x, y, warm.folds, C=warm.C, gamma=warm.gamma)
+    again = tr.tune_svr(x, y, warm_start=True, **kw)
+    assert (again.C, again.gamma, again.cv_mse, again.n_fits) == (warm.C, warm.gamma, warm.cv_mse, warm.n_fits)
+
+
 def test_tune_svr_refuses_bad_input() -> None:
     x, y = seed004_like()
     with pytest.raises(ParameterError, match="unknown keys"):

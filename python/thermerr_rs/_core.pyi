@@ -293,8 +293,9 @@ def tune_svr(
     c2: float = 1.49618,
     vmax_frac: float = 0.2,
     seed: int = 0,
+    warm_start: bool = False,
     progress: Any = None,
-) -> tuple[float, float, float, list[float], int, SvrModel]: ...
+) -> tuple[float, float, float, list[float], int, int, SvrModel]: ...
 
 # --- seed 002: grey models and BP networks -------------------------------------------------------
 @final

@@ -335,12 +335,82 @@ impl SvrValidParams {
         x.require_finite("X")?;
         check_target(y, x.nrows())?;
         let kernel = self.kernel_for(x);
-        let mut q = SvrQ::new(x, kernel, self.cache_size);
-        let l = x.nrows();
+        let q = SvrQ::new(Source::Rows(x), kernel, self.cache_size);
+        let rows: Vec<usize> = (0..x.nrows()).collect();
+        self.solve_q(q, x, &rows, y, None)
+    }
+
+    /// [`fit`](Self::fit) on the rows `rows` of the data `shared` was formed from (`x`, all of
+    /// it), reading the squared distances from `shared` instead of forming them: the same model,
+    /// bit for bit, as `fit` on those rows gathered (`tests::shared_distances_give_the_same_model`).
+    /// RBF kernel with γ given as a value only.
+    ///
+    /// `warm`: start SMO from another solution on the same rows, `(β, C)` with β = α − α* per
+    /// row, fitted with that C (a neighbouring point of a search): α and α* are scaled by the
+    /// ratio of the Cs, which keeps them feasible. The solver then stops by the same rule, at a
+    /// solution as optimal (within `tol`) as a cold start's, but not the same bits.
+    pub(crate) fn fit_shared(
+        &self,
+        x: Samples<'_>,
+        rows: &[usize],
+        y: &[f64],
+        shared: &SharedDistances,
+        warm: Option<(&[f64], f64)>,
+    ) -> Result<SvrModel> {
+        let gamma = match (self.kernel, self.gamma) {
+            (KernelKind::Rbf, Gamma::Value(g)) => g,
+            _ => {
+                return Err(Error::param(
+                    "kernel",
+                    "shared distances need an RBF kernel with gamma given as a number",
+                ))
+            }
+        };
+        check_target(y, rows.len())?;
+        let kernel = Kernel::Rbf { gamma };
+        let q = SvrQ::new(Source::Shared { d: shared, rows }, kernel, self.cache_size);
+        let init = match warm {
+            Some((beta, c0)) if beta.len() == rows.len() && c0 > 0.0 => {
+                let (l, r) = (rows.len(), self.c / c0);
+                let mut a = vec![0.0; 2 * l];
+                for (k, &b) in beta.iter().enumerate() {
+                    // at the old bound exactly: at the new one exactly
+                    let v = if b.abs() >= c0 {
+                        self.c
+                    } else {
+                        (b.abs() * r).min(self.c)
+                    };
+                    a[if b > 0.0 { k } else { k + l }] = v;
+                }
+                Some(a)
+            }
+            _ => None,
+        };
+        self.solve_q(q, x, rows, y, init)
+    }
+
+    fn solve_q(
+        &self,
+        mut q: SvrQ<'_>,
+        x: Samples<'_>,
+        rows: &[usize],
+        y: &[f64],
+        init: Option<Vec<f64>>,
+    ) -> Result<SvrModel> {
+        let kernel = q.kernel;
+        let l = rows.len();
         let mut p = Vec::with_capacity(2 * l);
         p.extend(y.iter().map(|v| self.epsilon - v));
         p.extend(y.iter().map(|v| self.epsilon + v));
-        let sol = solve(&mut q, p, self.c, self.tol, self.shrinking, self.max_iter)?;
+        let sol = solve(
+            &mut q,
+            p,
+            self.c,
+            self.tol,
+            self.shrinking,
+            self.max_iter,
+            init,
+        )?;
         let mut support = Vec::new();
         let mut dual_coef = Vec::new();
         for i in 0..l {
@@ -352,7 +422,7 @@ impl SvrValidParams {
         }
         let mut sv = Vec::with_capacity(support.len() * x.ncols());
         for &i in &support {
-            sv.extend_from_slice(x.row(i));
+            sv.extend_from_slice(x.row(rows[i]));
         }
         Ok(SvrModel {
             kernel,
@@ -368,13 +438,116 @@ impl SvrValidParams {
     }
 }
 
+/// The squared distances between all rows of a data set, in both of LIBSVM's forms, formed
+/// once so that many RBF fits and predictions on subsets of the rows (a search's folds and
+/// points) read them instead of forming each from the features again: `train[i·n + j]` =
+/// ‖xᵢ‖² + ‖xⱼ‖² − 2 xᵢ·xⱼ (the solver's), `predict[i·n + j]` = Σ (xᵢ − xⱼ)² (`k_function`'s),
+/// sequential sums as LIBSVM's. 16 n² bytes.
+#[cfg(feature = "fit")]
+pub(crate) struct SharedDistances {
+    n: usize,
+    train: Vec<f64>,
+    predict: Vec<f64>,
+}
+
+#[cfg(feature = "fit")]
+impl SharedDistances {
+    /// Both forms for the rows of `x` (rows in parallel).
+    pub(crate) fn new(x: Samples<'_>) -> Self {
+        use rayon::prelude::*;
+        let n = x.nrows();
+        let xsq: Vec<f64> = x.rows().map(|r| dot(r, r)).collect();
+        let mut train = vec![0.0; n * n];
+        let mut predict = vec![0.0; n * n];
+        train
+            .par_chunks_mut(n.max(1))
+            .zip(predict.par_chunks_mut(n.max(1)))
+            .enumerate()
+            .for_each(|(i, (t, p))| {
+                let xi = x.row(i);
+                for j in 0..n {
+                    let xj = x.row(j);
+                    t[j] = xsq[i] + xsq[j] - 2.0 * dot(xi, xj);
+                    let mut sum = 0.0;
+                    for (a, b) in xi.iter().zip(xj) {
+                        let d = a - b;
+                        sum += d * d;
+                    }
+                    p[j] = sum;
+                }
+            });
+        Self { n, train, predict }
+    }
+
+    /// Bytes the two forms take for `n` rows.
+    pub(crate) fn bytes(n: usize) -> usize {
+        16usize.saturating_mul(n).saturating_mul(n)
+    }
+}
+
+#[cfg(feature = "fit")]
+impl SvrModel {
+    /// The predictions at the rows `at` of the data `shared` was formed from, for a model fitted
+    /// by [`SvrValidParams::fit_shared`] on its rows `rows`: the same numbers, bit for bit, as
+    /// [`predict`](Self::predict) on those rows gathered.
+    pub(crate) fn predict_shared(
+        &self,
+        at: &[usize],
+        rows: &[usize],
+        shared: &SharedDistances,
+    ) -> Vec<f64> {
+        use rayon::prelude::*;
+        let gamma = match self.kernel {
+            Kernel::Rbf { gamma } => gamma,
+            Kernel::Linear => unreachable!("fit_shared fits RBF models only"),
+        };
+        let one = |&t: &usize| {
+            let d = &shared.predict[t * shared.n..(t + 1) * shared.n];
+            let mut sum = 0.0;
+            for (c, &s) in self.dual_coef.iter().zip(&self.support) {
+                sum += c * (-gamma * d[rows[s]]).exp();
+            }
+            sum + self.intercept
+        };
+        if at.len() * self.dual_coef.len() >= 1 << 16 {
+            at.par_iter().map(one).collect()
+        } else {
+            at.iter().map(one).collect()
+        }
+    }
+}
+
+/// Kernel values formed per task when a column is filled.
+#[cfg(feature = "fit")]
+const FILL_CHUNK: usize = 256;
+
+/// Columns whose work (length × features) is at least this are filled in parallel.
+#[cfg(feature = "fit")]
+const PAR_FILL: usize = 1 << 30;
+
+/// Where the solver's kernel values come from: formed from the rows of the training data, or read
+/// from distances formed once for a superset of them.
+#[cfg(feature = "fit")]
+enum Source<'a> {
+    Rows(Samples<'a>),
+    Shared {
+        d: &'a SharedDistances,
+        rows: &'a [usize],
+    },
+}
+
 /// The SVR's Q matrix over 2l variables (LIBSVM's `SVR_Q`): Q_ts = s_t s_u K(t mod l, u mod l),
 /// with the permutation that shrinking applies, over an LRU cache of kernel rows.
 #[cfg(feature = "fit")]
 struct SvrQ<'a> {
-    x: Samples<'a>,
+    src: Source<'a>,
+    l: usize,
+    /// work per kernel value (the features, or 1 for a read distance): decides parallel fills
+    work: usize,
     kernel: Kernel,
     xsq: Vec<f64>,
+    /// the training rows transposed (feature-major), for the RBF's column fills
+    xt: Vec<f64>,
     cache: Cache,
     /// s_t = ±1 of each (permuted) variable, as f32 so that s_t s_u K is formed exactly as
     /// LIBSVM's `Qfloat` products are.
@@ -385,13 +558,31 @@ struct SvrQ<'a> {
 
 #[cfg(feature = "fit")]
 impl<'a> SvrQ<'a> {
-    fn new(x: Samples<'a>, kernel: Kernel, cache_mib: f64) -> Self {
-        let l = x.nrows();
-        let xsq: Vec<f64> = x.rows().map(|r| dot(r, r)).collect();
+    fn new(src: Source<'a>, kernel: Kernel, cache_mib: f64) -> Self {
+        let (l, work, xsq) = match &src {
+            Source::Rows(x) => (x.nrows(), x.ncols(), x.rows().map(|r| dot(r, r)).collect()),
+            Source::Shared { rows, .. } => (rows.len(), 1, Vec::new()),
+        };
+        let xt = match (&src, kernel) {
+            (Source::Rows(x), Kernel::Rbf { .. }) => {
+                let (n, d) = (x.nrows(), x.ncols());
+                let mut t = vec![0.0; n * d];
+                for (j, r) in x.rows().enumerate() {
+                    for (k, &v) in r.iter().enumerate() {
+                        t[k * n + j] = v;
+                    }
+                }
+                t
+            }
+            _ => Vec::new(),
+        };
         let mut q = SvrQ {
-            x,
+            src,
+            l,
+            work,
             kernel,
             xsq,
+            xt,
             cache: Cache::new(l, cache_mib),
             sign: (0..2 * l).map(|t| if t < l { 1.0 } else { -1.0 }).collect(),
             index: (0..2 * l).map(|t| t % l).collect(),
@@ -405,10 +596,67 @@ impl<'a> SvrQ<'a> {
     /// LIBSVM's training-time kernel (`kernel_rbf` uses the precomputed squared norms).
     #[inline]
     fn k(&self, i: usize, j: usize) -> f64 {
-        let d = dot(self.x.row(i), self.x.row(j));
-        match self.kernel {
-            Kernel::Rbf { gamma } => (-gamma * (self.xsq[i] + self.xsq[j] - 2.0 * d)).exp(),
-            Kernel::Linear => d,
+        match (&self.src, self.kernel) {
+            (Source::Rows(x), Kernel::Rbf { gamma }) => {
+                let d = dot(x.row(i), x.row(j));
+                (-gamma * (self.xsq[i] + self.xsq[j] - 2.0 * d)).exp()
+            }
+            (Source::Rows(x), Kernel::Linear) => dot(x.row(i), x.row(j)),
+            (Source::Shared { d, rows }, Kernel::Rbf { gamma }) => {
+                (-gamma * d.train[rows[i] * d.n + rows[j]]).exp()
+            }
+            (Source::Shared { .. }, Kernel::Linear) => unreachable!("fit_shared is RBF only"),
+        }
+    }
+
+    /// K(i, j) as f32 for j = start.. into `out`: the same values as [`k`](Self::k), with the
+    /// RBF's dot products of a chunk formed in one pass before its `exp`s, so that the
+    /// independent sequential sums overlap in the processor instead of waiting on each `exp`.
+    fn fill(&self, i: usize, start: usize, out: &mut [f32]) {
+        match (&self.src, self.kernel) {
+            (Source::Rows(x), Kernel::Rbf { gamma }) => {
+                // the chunk's dot products feature by feature over the transposed rows: each is
+                // still the sequential sum over the features (LIBSVM's bits), and the sums of
+                // neighbouring rows advance together in vector registers
+                let (n, l) = (out.len(), self.l);
+                let xi = x.row(i);
+                let mut acc = [0.0f64; FILL_CHUNK];
+                // eight rows at a time, their eight sums kept in registers over the features
+                let mut j = 0;
+                while j + 8 <= n {
+                    let mut s = [0.0f64; 8];
+                    for (k, &a) in xi.iter().enumerate() {
+                        let c = &self.xt[k * l + start + j..k * l + start + j + 8];
+                        for o in 0..8 {
+                            s[o] += a * c[o];
+                        }
+                    }
+                    acc[j..j + 8].copy_from_slice(&s);
+                    j += 8;
+                }
+                for (jj, s) in acc.iter_mut().enumerate().take(n).skip(j) {
+                    for (k, &a) in xi.iter().enumerate() {
+                        *s += a * self.xt[k * l + start + jj];
+                    }
+                }
+                let acc = &acc[..n];
+                let sq = &self.xsq[start..start + n];
+                for ((o, s), &q) in out.iter_mut().zip(acc.iter()).zip(sq) {
+                    *o = (-gamma * (self.xsq[i] + q - 2.0 * s)).exp() as f32;
+                }
+            }
+            (Source::Shared { d, rows }, Kernel::Rbf { gamma }) => {
+                let base = &d.train[rows[i] * d.n..(rows[i] + 1) * d.n];
+                let end = start + out.len();
+                for (o, &r) in out.iter_mut().zip(&rows[start..end]) {
+                    *o = (-gamma * base[r]).exp() as f32;
+                }
+            }
+            _ => {
+                for (o, j) in out.iter_mut().zip(start..) {
+                    *o = self.k(i, j) as f32;
+                }
+            }
         }
     }
 
@@ -426,15 +674,15 @@ impl<'a> SvrQ<'a> {
     fn col(&mut self, i: usize) -> usize {
         let real = self.index[i];
         if !self.cache.has(real) {
-            let l = self.x.nrows();
+            let l = self.l;
             let mut row = self.cache.take_slot(l);
             let this = &*self;
-            let fill = |(j, v): (usize, &mut f32)| *v = this.k(real, j) as f32;
-            if l * self.x.ncols() >= 4096 {
+            let fill = |(c, out): (usize, &mut [f32])| this.fill(real, c * FILL_CHUNK, out);
+            if l * self.work >= PAR_FILL {
                 use rayon::prelude::*;
-                row.par_iter_mut().enumerate().for_each(fill);
+                row.par_chunks_mut(FILL_CHUNK).enumerate().for_each(fill);
             } else {
-                row.iter_mut().enumerate().for_each(fill);
+                row.chunks_mut(FILL_CHUNK).enumerate().for_each(fill);
             }
             self.cache.put(real, row);
         } else {
@@ -700,6 +948,7 @@ fn solve(
     eps: f64,
     shrinking: bool,
     max_iter: Option<usize>,
+    init: Option<Vec<f64>>,
 ) -> Result<Solution> {
     let l = p.len();
     let mut s = Solver {
@@ -724,6 +973,9 @@ fn solve(
         qi_of: None,
         q,
     };
+    if let Some(a) = init {
+        s.start_from(a);
+    }
     let mut iter = 0usize;
     let mut counter = l.min(1000) + 1;
     // the first half of the next selection, computed during the last gradient update
@@ -816,6 +1068,37 @@ impl Solver<'_, '_> {
         self.p.swap(i, j);
         self.active_set.swap(i, j);
         self.g_bar.swap(i, j);
+    }
+
+    /// Starts from α = `a` (2l values in [0, C], in the unpermuted order) instead of 0, as
+    /// LIBSVM's solver does for a given α: statuses from α, G = p + Qα and Ḡ = C Σ_upper Q_u.
+    /// Variables t and t + l share kernel row t mod l, so both sums go through one row per
+    /// data row: (Qα)_t = s_t Σ_k (α_k − α_{k+l}) K(t mod l, k).
+    fn start_from(&mut self, a: Vec<f64>) {
+        let n = self.l / 2;
+        self.alpha = a;
+        for i in 0..self.l {
+            self.update_status(i);
+        }
+        let (mut kb, mut ku) = (vec![0.0f64; n], vec![0.0f64; n]);
+        for k in 0..n {
+            let beta = self.alpha[k] - self.alpha[k + n];
+            let upper =
+                self.c * ((self.is_upper(k) as u8 as f64) - (self.is_upper(k + n) as u8 as f64));
+            if beta == 0.0 && upper == 0.0 {
+                continue;
+            }
+            let r = self.q.col(k);
+            for ((b, u), &v) in kb.iter_mut().zip(ku.iter_mut()).zip(self.q.data(r)) {
+                *b += beta * v as f64;
+                *u += upper * v as f64;
+            }
+        }
+        for t in 0..self.l {
+            let (s, row) = (self.yf[t], t % n);
+            self.g[t] = self.p[t] + s * kb[row];
+            self.g_bar[t] = s * ku[row];
+        }
     }
 
     fn reconstruct_gradient(&mut self) {
@@ -1166,6 +1449,90 @@ mod tests {
                 assert!((y[i] - pred[i]).abs() <= 0.05 + 1e-4);
             }
         }
+    }
+
+    /// A fit and its predictions through distances formed once for a superset of the rows are
+    /// the ones from the rows gathered, bit for bit (rows in any order, a small cache too).
+    #[test]
+    fn shared_distances_give_the_same_model() {
+        let (x, y) = data(150);
+        let all = Samples::new(&x, 150, 3).unwrap();
+        let shared = SharedDistances::new(all);
+        let rows: Vec<usize> = (0..150).filter(|i| i % 3 != 1).rev().collect();
+        let test: Vec<usize> = (0..150).filter(|i| i % 3 == 1).collect();
+        let gather =
+            |idx: &[usize]| -> Vec<f64> { idx.iter().flat_map(|&i| all.row(i).to_vec()).collect() };
+        let (xr, xt) = (gather(&rows), gather(&test));
+        let yr: Vec<f64> = rows.iter().map(|&i| y[i]).collect();
+        for (c, gamma, cache) in [(10.0, 0.7, 200.0), (0.5, 3.0, 1e-3)] {
+            let p = SvrParams::new()
+                .c(c)
+                .epsilon(0.02)
+                .gamma(Gamma::Value(gamma))
+                .cache_size(cache)
+                .check()
+                .unwrap();
+            let a = p
+                .fit(Samples::new(&xr, rows.len(), 3).unwrap(), &yr)
+                .unwrap();
+            let b = p.fit_shared(all, &rows, &yr, &shared, None).unwrap();
+            assert_eq!(a, b);
+            let pa = a
+                .predict(Samples::new(&xt, test.len(), 3).unwrap())
+                .unwrap();
+            let pb = b.predict_shared(&test, &rows, &shared);
+            assert_eq!(pa, pb);
+        }
+        // the linear kernel, or a γ by name, cannot be read from distances
+        let lin = SvrParams::new().kernel(KernelKind::Linear).check().unwrap();
+        assert!(lin.fit_shared(all, &rows, &yr, &shared, None).is_err());
+    }
+
+    /// A warm start from a neighbouring (C, γ) reaches a solution that meets the same stopping
+    /// rule in fewer iterations; its predictions agree with the cold start's to O(tol).
+    #[test]
+    fn a_warm_start_ends_at_an_equally_good_solution_sooner() {
+        let (x, y) = data(200);
+        let all = Samples::new(&x, 200, 3).unwrap();
+        let shared = SharedDistances::new(all);
+        let rows: Vec<usize> = (0..200).collect();
+        let at = |c: f64, g: f64| {
+            SvrParams::new()
+                .c(c)
+                .epsilon(0.01)
+                .gamma(Gamma::Value(g))
+                .check()
+                .unwrap()
+        };
+        let old = at(20.0, 1.1)
+            .fit_shared(all, &rows, &y, &shared, None)
+            .unwrap();
+        let mut beta = vec![0.0; 200];
+        for (&k, &b) in old.support.iter().zip(&old.dual_coef) {
+            beta[k] = b;
+        }
+        let new = at(30.0, 1.0);
+        let cold = new.fit_shared(all, &rows, &y, &shared, None).unwrap();
+        let warm = new
+            .fit_shared(all, &rows, &y, &shared, Some((&beta, 20.0)))
+            .unwrap();
+        assert!(
+            warm.n_iter < cold.n_iter,
+            "{} vs {}",
+            warm.n_iter,
+            cold.n_iter
+        );
+        let (pc, pw) = (cold.predict(all).unwrap(), warm.predict(all).unwrap());
+        let worst = pc
+            .iter()
+            .zip(&pw)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        // two solutions meeting the rule (max violation < tol = 1e-3) differ by O(tol)
+        assert!(worst < 1e-2, "largest difference {worst}");
+        // the equality constraint survives the scaling: Σ β = 0
+        let sum: f64 = warm.dual_coef.iter().sum();
+        assert!(sum.abs() < 1e-9 * 30.0 * 200.0, "{sum}");
     }
 
     #[test]

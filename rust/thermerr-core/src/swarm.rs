@@ -302,15 +302,16 @@ pub struct SwarmResult {
     pub n_evals: usize,
 }
 
-/// Evaluates one generation through the caller's batch function, checks the length and maps
-/// non-finite values to +∞.
-fn eval<F>(f: &mut F, pop: &[Vec<f64>], n_evals: &mut usize) -> Result<Vec<f64>>
+/// Evaluates one generation through the caller's batch function (with each member's memory
+/// value as its bar, see [`cso_minimize_pruned`]), checks the length and maps non-finite values
+/// to +∞.
+fn eval<F>(f: &mut F, pop: &[Vec<f64>], bar: &[f64], n_evals: &mut usize) -> Result<Vec<f64>>
 where
-    F: FnMut(&[Vec<f64>]) -> Result<Vec<f64>>,
+    F: FnMut(&[Vec<f64>], &[f64]) -> Result<Vec<f64>>,
 {
     // every generation of either swarm passes here: the place to honour an interrupt
     crate::interrupt::check()?;
-    let mut v = f(pop)?;
+    let mut v = f(pop, bar)?;
     crate::interrupt::check()?;
     if v.len() != pop.len() {
         return Err(Error::Shape(format!(
@@ -388,6 +389,19 @@ pub fn cso_minimize_batch<F>(mut f: F, bounds: &Bounds, params: &CsoParams) -> R
 where
     F: FnMut(&[Vec<f64>]) -> Result<Vec<f64>>,
 {
+    cso_minimize_pruned(|pop: &[Vec<f64>], _: &[f64]| f(pop), bounds, params)
+}
+
+/// [`cso_minimize_batch`] for an objective that can stop early: `f(pop, bar)` gets with the
+/// population each member's memory value (`bar[i]`, the best value chicken `i` has seen; +∞ for
+/// the initial population) and may return, for any member whose value is at least `bar[i]`, any
+/// number at least `bar[i]` instead of the value. Both swarms compare a new value only with the
+/// member's memory (`f < bar` moves the memory, anything else leaves it), so the search takes the
+/// same path and gives the same result, bit for bit, as with every value computed in full.
+pub fn cso_minimize_pruned<F>(mut f: F, bounds: &Bounds, params: &CsoParams) -> Result<SwarmResult>
+where
+    F: FnMut(&[Vec<f64>], &[f64]) -> Result<Vec<f64>>,
+{
     bounds.check()?;
     let (rn, hn, cn) = params.roles()?;
     let n = params.pop;
@@ -397,7 +411,7 @@ where
     let mut n_evals = 0;
 
     let mut x: Vec<Vec<f64>> = (0..n).map(|_| bounds.sample(&mut rng)).collect();
-    let mut pf = eval(&mut f, &x, &mut n_evals)?;
+    let mut pf = eval(&mut f, &x, &vec![f64::INFINITY; n], &mut n_evals)?;
     let mut px = x.clone();
     let b = argmin(&pf);
     let mut best_x = px[b].clone();
@@ -498,7 +512,7 @@ where
             }
         }
 
-        let fit = eval(&mut f, &x, &mut n_evals)?;
+        let fit = eval(&mut f, &x, &pf, &mut n_evals)?;
         for i in 0..n {
             if fit[i] < pf[i] {
                 pf[i] = fit[i];
@@ -542,6 +556,15 @@ pub fn pso_minimize_batch<F>(mut f: F, bounds: &Bounds, params: &PsoParams) -> R
 where
     F: FnMut(&[Vec<f64>]) -> Result<Vec<f64>>,
 {
+    pso_minimize_pruned(|pop: &[Vec<f64>], _: &[f64]| f(pop), bounds, params)
+}
+
+/// [`pso_minimize_batch`] for an objective that can stop early, with the contract of
+/// [`cso_minimize_pruned`] (`bar[i]` is particle `i`'s personal best).
+pub fn pso_minimize_pruned<F>(mut f: F, bounds: &Bounds, params: &PsoParams) -> Result<SwarmResult>
+where
+    F: FnMut(&[Vec<f64>], &[f64]) -> Result<Vec<f64>>,
+{
     bounds.check()?;
     params.check()?;
     let n = params.pop;
@@ -563,7 +586,7 @@ where
                 .collect()
         })
         .collect();
-    let mut pf = eval(&mut f, &x, &mut n_evals)?;
+    let mut pf = eval(&mut f, &x, &vec![f64::INFINITY; n], &mut n_evals)?;
     let mut px = x.clone();
     let b = argmin(&pf);
     let mut best_x = px[b].clone();
@@ -583,7 +606,7 @@ where
                 x[i][j] = clip(x[i][j] + v[i][j], lo[j], hi[j], x[i][j]);
             }
         }
-        let fit = eval(&mut f, &x, &mut n_evals)?;
+        let fit = eval(&mut f, &x, &pf, &mut n_evals)?;
         for i in 0..n {
             if fit[i] < pf[i] {
                 pf[i] = fit[i];

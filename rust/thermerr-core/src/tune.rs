@@ -2,7 +2,13 @@
 //! (C, γ), minimising the cross-validated mean squared error over explicit (train, test) splits:
 //! time-ordered ones ([`time_series_split`], scikit-learn's `TimeSeriesSplit`) for runs, or the
 //! shuffled k-fold ones of the seed ([`kfold_splits`]). The objective is evaluated
-//! natively: each generation's population × folds SVR fits run in parallel (rayon).
+//! natively: each generation's SVR fits run in parallel (rayon), one fold at a time, cheapest
+//! training set first; a point stops as soon as its folds so far prove it cannot beat its
+//! member's memory, and every (point, fold) is fitted once per search. Both are exact: the
+//! search takes the same path to the same result as with every fold of every point fitted
+//! ([`SearchCost`] counts what was fitted).
+
+use std::collections::HashMap;
 
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
@@ -11,8 +17,8 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::samples::{check_target, Samples};
-use crate::svr::{Gamma, KernelKind, SvrModel, SvrParams};
-use crate::swarm::{cso_minimize_batch, pso_minimize_batch, Bounds, CsoParams, PsoParams};
+use crate::svr::{Gamma, KernelKind, SharedDistances, SvrModel, SvrParams};
+use crate::swarm::{cso_minimize_pruned, pso_minimize_pruned, Bounds, CsoParams, PsoParams};
 
 /// Which swarm searches.
 #[derive(Clone, Debug, PartialEq)]
@@ -37,6 +43,29 @@ pub struct TuneParams {
     pub gamma_bounds: (f64, f64),
     pub scale: Scale,
     pub search: Search,
+    /// Start each fold's SMO from the solution of the nearest point already fitted on that fold
+    /// (within [`WARM_RADIUS`] decades of C and γ): fewer iterations, each solution as optimal
+    /// within `tol` as a cold start's but not the same bits, so the search's path may differ in
+    /// the last digits. `false`: the plain search's path, bit for bit.
+    pub warm_start: bool,
+}
+
+/// How far (Euclidean, in decades of C and γ) a fitted point may be from a new one to start its
+/// solver from.
+pub const WARM_RADIUS: f64 = 0.5;
+
+/// Fitted solutions kept per fold for warm starts (the most recent ones).
+const WARM_KEEP: usize = 64;
+
+/// A point's task in a generation: its MSE per fold (NaN where not fitted), the solutions it
+/// found (per fold) and how many folds it fitted.
+type PointDone = (Vec<f64>, Vec<(usize, Solved)>, usize);
+
+/// A fold's fitted solution: (log10 C, log10 γ), C, and β = α − α* per training row.
+struct Solved {
+    at: [f64; 2],
+    c: f64,
+    beta: Vec<f64>,
 }
 
 /// The outcome of [`tune_svr`].
@@ -49,8 +78,20 @@ pub struct TuneResult {
     /// Best CV MSE after each generation.
     pub history: Vec<f64>,
     pub n_evals: usize,
+    /// The SVR fits the search did and would have done with every fold of every point.
+    pub cost: SearchCost,
     /// The SVR refitted on all the data with (c, gamma).
     pub model: SvrModel,
+}
+
+/// How many fold fits a search did (`fits`) against the `n_evals × folds` of a search that fits
+/// every fold of every point (`full`): the difference is points met before (fitted once per
+/// fold) and points stopped early because their first folds already exceeded their member's
+/// memory.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SearchCost {
+    pub fits: usize,
+    pub full: usize,
 }
 
 /// One cross-validation split: the samples an SVR is trained on and those it is scored on.
@@ -264,15 +305,212 @@ fn fold_mse(f: &Fold, d: usize, p: &SvrParams) -> f64 {
             let xt = Samples::new(&f.x_test, f.y_test.len(), d)?;
             m.predict(xt)
         });
-    match fit {
+    mse_of(fit, &f.y_test)
+}
+
+/// The held-out MSE of predictions, +∞ for a failed fit or a NaN (NaN marks "not fitted" in
+/// [`FoldedObjective`]).
+fn mse_of(pred: Result<Vec<f64>>, y: &[f64]) -> f64 {
+    let mse = match pred {
         Ok(pred) => {
             pred.iter()
-                .zip(&f.y_test)
+                .zip(y)
                 .map(|(a, b)| (a - b) * (a - b))
                 .sum::<f64>()
-                / f.y_test.len() as f64
+                / y.len() as f64
         }
         Err(_) => f64::INFINITY,
+    };
+    if mse.is_nan() {
+        f64::INFINITY
+    } else {
+        mse
+    }
+}
+
+/// A point stops once its partial mean exceeds the bar by more than this relative margin:
+/// the held-out MSEs are non-negative, so the full mean is at least the partial one, and the
+/// margin covers the rounding of summing the folds in another order (a few ulps).
+const STOP_MARGIN: f64 = 1e-9;
+
+/// The largest data set (in bytes of its two distance matrices, 16 n²) whose distances a search
+/// forms once and shares between its fits; above it every fit forms its kernel from the features.
+pub const SHARED_MAX_BYTES: usize = 2 << 30;
+
+/// The cross-validated MSE of a search's points, fold by fold, each (point, fold) fitted once.
+struct FoldedObjective<'a> {
+    parts: &'a [Fold],
+    splits: &'a [Split],
+    x: Samples<'a>,
+    shared: Option<SharedDistances>,
+    params: &'a TuneParams,
+    /// per point (C, γ bits): each fold's MSE, NaN while not fitted
+    seen: HashMap<[u64; 2], Vec<f64>>,
+    /// the point with the smallest mean over all folds so far
+    best: Option<([u64; 2], f64)>,
+    /// per fold, recent solutions to start from (with `warm_start`)
+    solved: Vec<Vec<Solved>>,
+    cost: SearchCost,
+}
+
+impl<'a> FoldedObjective<'a> {
+    fn new(x: Samples<'a>, parts: &'a [Fold], splits: &'a [Split], params: &'a TuneParams) -> Self {
+        let shared = (SharedDistances::bytes(x.nrows()) <= SHARED_MAX_BYTES)
+            .then(|| SharedDistances::new(x));
+        Self {
+            parts,
+            splits,
+            x,
+            shared,
+            params,
+            seen: HashMap::new(),
+            best: None,
+            solved: (0..parts.len()).map(|_| Vec::new()).collect(),
+            cost: SearchCost::default(),
+        }
+    }
+
+    /// Held-out MSE of fold `j` at (c, γ): from the shared distances if formed (the same bits),
+    /// started from the nearest solution on the fold with `warm_start`; with the new solution to
+    /// keep for later starts.
+    fn fold(&self, j: usize, c: f64, gamma: f64, warm_start: bool) -> (f64, Option<Solved>) {
+        let (f, svr) = (&self.parts[j], self.params.svr_at(c, gamma));
+        let Some(sh) = &self.shared else {
+            return (fold_mse(f, self.x.ncols(), &svr), None);
+        };
+        let s = &self.splits[j];
+        let at = [c.log10(), gamma.log10()];
+        let warm = warm_start.then(|| {
+            self.solved[j]
+                .iter()
+                .map(|w| ((w.at[0] - at[0]).hypot(w.at[1] - at[1]), w))
+                .filter(|(d, _)| *d <= WARM_RADIUS)
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .map(|(_, w)| (w.beta.as_slice(), w.c))
+        });
+        let model = svr
+            .check()
+            .and_then(|p| p.fit_shared(self.x, &s.train, &f.y_train, sh, warm.flatten()));
+        let solved = model.as_ref().ok().filter(|_| warm_start).map(|m| {
+            let mut beta = vec![0.0; s.train.len()];
+            for (&k, &b) in m.support.iter().zip(&m.dual_coef) {
+                beta[k] = b;
+            }
+            Solved { at, c, beta }
+        });
+        let pred = model.map(|m| m.predict_shared(&s.test, &s.train, sh));
+        (mse_of(pred, &f.y_test), solved)
+    }
+
+    /// The mean over the folds at (c, γ) with every solver started cold: the objective as
+    /// [`cv_mse`] computes it (the same bits), for the point a warm-started search returns.
+    fn cold_mean(&self, c: f64, gamma: f64) -> f64 {
+        let per: Vec<f64> = (0..self.parts.len())
+            .into_par_iter()
+            .map(|j| self.fold(j, c, gamma, false).0)
+            .collect();
+        fold_mean(&per)
+    }
+
+    /// The order to fit folds in: the most of the best point's error per unit of work first
+    /// (work ~ training size squared), so that a point that cannot win is stopped soonest; by
+    /// training size until a point has all its folds.
+    fn order(&self) -> Vec<usize> {
+        let work = |j: usize| (self.parts[j].y_train.len() as f64).powi(2);
+        let mut order: Vec<usize> = (0..self.parts.len()).collect();
+        match self.best.map(|(k, _)| &self.seen[&k]) {
+            Some(per) => order.sort_by(|&a, &b| (per[b] / work(b)).total_cmp(&(per[a] / work(a)))),
+            None => order.sort_by(|&a, &b| work(a).total_cmp(&work(b))),
+        }
+        order
+    }
+
+    /// The mean MSE over the folds of each point, or, for a point whose value is at least its
+    /// `bar` (the swarm's contract, see [`cso_minimize_pruned`]), a partial mean at least `bar`.
+    fn eval(&mut self, pop: &[Vec<f64>], bar: &[f64]) -> Result<Vec<f64>> {
+        let nf = self.parts.len();
+        let keys: Vec<[u64; 2]> = pop
+            .iter()
+            .map(|v| {
+                let (c, g) = self.params.decode(v);
+                [c.to_bits(), g.to_bits()]
+            })
+            .collect();
+        self.cost.full += pop.len() * nf;
+        // one task per distinct point, run until its folds exceed the largest bar among the
+        // members standing on it (so every member's own decision below is known)
+        let mut tasks: Vec<([u64; 2], f64)> = Vec::new();
+        for (i, k) in keys.iter().enumerate() {
+            match tasks.iter_mut().find(|(t, _)| t == k) {
+                Some(t) => t.1 = t.1.max(bar[i]),
+                None => tasks.push((*k, bar[i])),
+            }
+        }
+        let order = self.order();
+        let stops = |sum: f64, b: f64| sum / nf as f64 > b * (1.0 + STOP_MARGIN);
+        let this = &*self;
+        // points in parallel, each one's folds in turn: both cores busy to the end
+        let done: Vec<PointDone> = tasks
+            .par_iter()
+            .map(|(k, b)| {
+                let (c, g) = (f64::from_bits(k[0]), f64::from_bits(k[1]));
+                let mut per = this
+                    .seen
+                    .get(k)
+                    .cloned()
+                    .unwrap_or_else(|| vec![f64::NAN; nf]);
+                let (mut sum, mut solved, mut fits) = (0.0, Vec::new(), 0);
+                for &j in &order {
+                    if per[j].is_nan() {
+                        let (m, w) = this.fold(j, c, g, this.params.warm_start);
+                        per[j] = m;
+                        fits += 1;
+                        solved.extend(w.map(|w| (j, w)));
+                    }
+                    sum += per[j];
+                    if stops(sum, *b) {
+                        break;
+                    }
+                }
+                (per, solved, fits)
+            })
+            .collect();
+        // an interrupted fit scores infinity: stop here instead
+        crate::interrupt::check()?;
+        // merged in task order after the whole batch: the same starts on any thread count
+        for ((k, _), (per, solved, fits)) in tasks.iter().zip(done) {
+            self.seen.insert(*k, per);
+            self.cost.fits += fits;
+            for (j, w) in solved {
+                let kept = &mut self.solved[j];
+                if kept.len() == WARM_KEEP {
+                    kept.remove(0);
+                }
+                kept.push(w);
+            }
+        }
+        let mut open = vec![true; pop.len()];
+        let out: Vec<f64> = (0..pop.len())
+            .map(|i| {
+                let per = &self.seen[&keys[i]];
+                let mut sum = 0.0;
+                for &j in &order {
+                    sum += per[j];
+                    if stops(sum, bar[i]) {
+                        open[i] = false;
+                        return sum / nf as f64;
+                    }
+                }
+                // summed in fold order, as a search that fits every fold
+                fold_mean(per)
+            })
+            .collect();
+        for i in (0..pop.len()).filter(|&i| open[i]) {
+            if self.best.is_none_or(|(_, b)| out[i] < b) {
+                self.best = Some((keys[i], out[i]));
+            }
+        }
+        Ok(out)
     }
 }
 
@@ -285,7 +523,14 @@ pub fn cv_mse(x: Samples<'_>, y: &[f64], splits: &[Split], p: &SvrParams) -> Res
     check_splits(splits, x.nrows())?;
     let parts = split(x, y, splits);
     let d = x.ncols();
-    Ok(parts.par_iter().map(|f| fold_mse(f, d, p)).sum::<f64>() / parts.len() as f64)
+    let per: Vec<f64> = parts.par_iter().map(|f| fold_mse(f, d, p)).collect();
+    Ok(fold_mean(&per))
+}
+
+/// The mean of the folds' MSEs, summed in fold order: the one objective value [`cv_mse`] and the
+/// search compute, bit for bit.
+fn fold_mean(per: &[f64]) -> f64 {
+    per.iter().sum::<f64>() / per.len() as f64
 }
 
 impl TuneParams {
@@ -342,46 +587,43 @@ pub fn tune_svr(
     check_splits(splits, x.nrows())?;
     let bounds = params.bounds()?;
     let parts = split(x, y, splits);
-    let d = x.ncols();
+    let mut objective = FoldedObjective::new(x, &parts, splits, params);
     let mut generation = 0usize;
     let mut best = f64::INFINITY;
-    let eval = |pop: &[Vec<f64>]| -> Result<Vec<f64>> {
-        let nf = parts.len();
-        let per: Vec<f64> = (0..pop.len() * nf)
-            .into_par_iter()
-            .map(|t| {
-                let (c, g) = params.decode(&pop[t / nf]);
-                fold_mse(&parts[t % nf], d, &params.svr_at(c, g))
-            })
-            .collect();
-        // a fold whose fit failed scores infinity, an interrupted one too: stop here instead
-        crate::interrupt::check()?;
-        let out: Vec<f64> = per
-            .chunks(nf)
-            .map(|c| c.iter().sum::<f64>() / nf as f64)
-            .collect();
+    let eval = |pop: &[Vec<f64>], bar: &[f64]| -> Result<Vec<f64>> {
+        let out = objective.eval(pop, bar)?;
         best = out.iter().copied().fold(best, f64::min);
         progress(generation, best);
         generation += 1;
         Ok(out)
     };
     let res = match &params.search {
-        Search::Cso(p) => cso_minimize_batch(eval, &bounds, p)?,
-        Search::Pso(p) => pso_minimize_batch(eval, &bounds, p)?,
+        Search::Cso(p) => cso_minimize_pruned(eval, &bounds, p)?,
+        Search::Pso(p) => pso_minimize_pruned(eval, &bounds, p)?,
     };
+    let cost = objective.cost;
+    let (c, gamma) = params.decode(&res.x);
+    // a warm-started solution differs from a cold one in the last digits: report the objective
+    // at the point as anyone recomputing it gets it
+    let cv_mse = if params.warm_start && res.f.is_finite() {
+        objective.cold_mean(c, gamma)
+    } else {
+        res.f
+    };
+    crate::interrupt::check()?;
     if !res.f.is_finite() {
         return Err(Error::Numerical(
             "no (C, gamma) in the bounds gave a finite cross-validated error".into(),
         ));
     }
-    let (c, gamma) = params.decode(&res.x);
     let model = params.svr_at(c, gamma).check()?.fit(x, y)?;
     Ok(TuneResult {
         c,
         gamma,
-        cv_mse: res.f,
+        cv_mse,
         history: res.history,
         n_evals: res.n_evals,
+        cost,
         model,
     })
 }
@@ -552,6 +794,7 @@ mod tests {
                 seed: 7,
                 ..Default::default()
             }),
+            warm_start: true,
         };
         let mut calls = 0;
         let r = tune_svr(s, &y, &folds, &tp, |_, _| calls += 1).unwrap();
@@ -568,5 +811,83 @@ mod tests {
         // the reported CV error is the objective at the reported point
         let direct = cv_mse(s, &y, &folds, &tp.svr_at(r.c, r.gamma)).unwrap();
         assert!((direct - r.cv_mse).abs() <= 1e-12 * direct.max(1.0));
+    }
+
+    /// The pruned, memoised search takes the same path as one that fits every fold of every
+    /// point, bit for bit, with both swarms and both kinds of splits, and fits fewer folds.
+    #[test]
+    fn stopping_early_and_memoising_change_nothing_but_the_work() {
+        let n = 60;
+        let x: Vec<f64> = (0..n)
+            .flat_map(|i| {
+                let t = i as f64 / n as f64;
+                [t * 3.0, (t * 7.0).sin(), (t * 2.0).cos()]
+            })
+            .collect();
+        let y: Vec<f64> = x
+            .chunks(3)
+            .enumerate()
+            .map(|(i, r)| 3.0 * r[0] + r[1] * r[1] - r[2] + 0.05 * ((i * 37 % 11) as f64 - 5.0))
+            .collect();
+        let s = Samples::new(&x, n, 3).unwrap();
+        let searches = [
+            Search::Cso(CsoParams {
+                pop: 10,
+                iters: 15,
+                seed: 3,
+                ..Default::default()
+            }),
+            Search::Pso(PsoParams {
+                pop: 10,
+                iters: 15,
+                seed: 3,
+                ..Default::default()
+            }),
+        ];
+        let time = time_series_split(n, 4, 0, None, None).unwrap();
+        let shuffled = kfold_splits(n, 4, Some(2)).unwrap();
+        for search in searches {
+            for splits in [&time, &shuffled] {
+                let tp = TuneParams {
+                    svr: SvrParams::default(),
+                    c_bounds: (0.01, 10.0),
+                    gamma_bounds: (1e-3, 1.0),
+                    scale: Scale::Log,
+                    search: search.clone(),
+                    warm_start: false,
+                };
+                let r = tune_svr(s, &y, splits, &tp, |_, _| {}).unwrap();
+                // the plain search: every fold of every point
+                let parts = split(s, &y, splits);
+                let full = |pop: &[Vec<f64>]| -> Result<Vec<f64>> {
+                    Ok(pop
+                        .iter()
+                        .map(|v| {
+                            let (c, g) = tp.decode(v);
+                            parts
+                                .iter()
+                                .map(|f| fold_mse(f, 3, &tp.svr_at(c, g)))
+                                .sum::<f64>()
+                                / parts.len() as f64
+                        })
+                        .collect())
+                };
+                let b = tp.bounds().unwrap();
+                let plain = match &tp.search {
+                    Search::Cso(p) => crate::swarm::cso_minimize_batch(full, &b, p),
+                    Search::Pso(p) => crate::swarm::pso_minimize_batch(full, &b, p),
+                }
+                .unwrap();
+                let (c, g) = tp.decode(&plain.x);
+                assert_eq!(
+                    (r.c.to_bits(), r.gamma.to_bits(), r.cv_mse.to_bits()),
+                    (c.to_bits(), g.to_bits(), plain.f.to_bits()),
+                    "{search:?}"
+                );
+                assert_eq!(r.history, plain.history);
+                assert_eq!(r.cost.full, plain.n_evals * splits.len());
+                assert!(r.cost.fits < r.cost.full, "{:?}", r.cost);
+            }
+        }
     }
 }

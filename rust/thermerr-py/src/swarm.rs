@@ -260,10 +260,11 @@ fn svr_cv_mse(
 }
 
 /// Native CSO/PSO search of (C, gamma) by the CV MSE over (train, test) splits; returns
-/// (C, gamma, cv_mse, history, n_evals, model). `progress(generation, best)` is called after
+/// (C, gamma, cv_mse, history, n_evals, n_fits, model): n_fits the fold fits done (each point met
+/// before, or stopped early, costs fewer than its folds). `progress(generation, best)` is called after
 /// each generation (with the GIL), if given.
 #[pyfunction]
-#[pyo3(signature = (x, y, splits, *, method = "cso", c_bounds = (0.01, 1000.0), gamma_bounds = (1e-4, 10.0), scale = "log", epsilon = 0.1, tol = 1e-3, pop = 20, iters = 100, g = 10, roosters = 0.2, hens = 0.6, fl = (0.4, 1.0), w = 0.7298, c1 = 1.49618, c2 = 1.49618, vmax_frac = 0.2, seed = 0, progress = None))]
+#[pyo3(signature = (x, y, splits, *, method = "cso", c_bounds = (0.01, 1000.0), gamma_bounds = (1e-4, 10.0), scale = "log", epsilon = 0.1, tol = 1e-3, pop = 20, iters = 100, g = 10, roosters = 0.2, hens = 0.6, fl = (0.4, 1.0), w = 0.7298, c1 = 1.49618, c2 = 1.49618, vmax_frac = 0.2, seed = 0, warm_start = false, progress = None))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn tune_svr(
     py: Python<'_>,
@@ -287,8 +288,9 @@ fn tune_svr(
     c2: f64,
     vmax_frac: f64,
     seed: u64,
+    warm_start: bool,
     progress: Option<Py<PyAny>>,
-) -> PyResult<(f64, f64, f64, Vec<f64>, usize, PySvrModel)> {
+) -> PyResult<(f64, f64, f64, Vec<f64>, usize, usize, PySvrModel)> {
     let search = match self::method(
         method, pop, iters, g, roosters, hens, fl, w, c1, c2, vmax_frac, seed,
     )? {
@@ -312,6 +314,7 @@ fn tune_svr(
         gamma_bounds,
         scale,
         search,
+        warm_start,
     };
     let (xs, ys) = (samples(&x)?, slice1(&y)?);
     let splits = from_pairs(splits);
@@ -336,6 +339,7 @@ fn tune_svr(
         r.cv_mse,
         r.history,
         r.n_evals,
+        r.cost.fits,
         PySvrModel { inner: r.model },
     ))
 }
