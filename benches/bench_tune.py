@@ -1,5 +1,5 @@
 """Seed 004's search: CSO over (log10 C, log10 γ) of an RBF ε-SVR by 5-fold CV MSE on 45
-samples, population 20 × 100 generations. Ours: `tune_svr` (Rust CSO, every population × fold
+samples, population 20 × 100 generations. Ours: `tune_svr` (Rust CSO, each generation's points
 fit native and parallel). Reference: pymetaheuristic's chicken swarm optimiser (`chicken_so`;
 mealpy's "CSO" is cat swarm, another method) driving scikit-learn's SVR through
 `cross_val_score` on the same folds, same population, generations and bounds. The note gives the

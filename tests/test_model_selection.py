@@ -77,6 +77,27 @@ def test_budget_and_bad_input(example_run1):
         select_model(run, "E_z", SENSORS, budget_s=0)
 
 
+def test_a_swarm_tuned_svr_is_one_more_candidate_searched_on_the_same_splits(example_run1):
+    run = tr.read_run(example_run1)
+    sel = select_model(run, "E_z", SENSORS, families=["svr"], cv=3, tune="cso", tune_pop=6, tune_iters=3, seed=2)
+    assert len(sel.leaderboard) == 9 + 1
+    tuned = next(e for e in sel.leaderboard if e.candidate.tune)
+    assert tuned.candidate.tune == ("cso", 6, 3) and "tuned=cso 6x3" in tuned.candidate.label()
+    # its C and gamma are tune_svr's on the same time-ordered splits of the same inputs
+    x, y = run.input_matrix(SENSORS, "rise"), run["E_z"]
+    splits = tr.time_series_split(len(run), 3)
+    res = tr.tune_svr(x, y, cv=splits, bounds={"C": (0.1, 100.0), "gamma": (1e-3, 1.0)}, pop=6, iters=3, seed=2,
+                      progress=False)
+    assert (tuned.candidate.params["C"], tuned.candidate.params["gamma"]) == (res.C, res.gamma)
+    # and it is scored like every other candidate: the mean RMS over the splits
+    by_hand = [np.sqrt(np.mean((y[te] - tr.SVR(C=res.C, gamma=res.gamma).fit(x[tr_], y[tr_]).predict(x[te])) ** 2))
+               for tr_, te in splits]
+    assert tuned.cv_rms == pytest.approx(float(np.mean(by_hand)), rel=1e-12)
+    assert sel.to_dict()["leaderboard"][sel.leaderboard.index(tuned)]["tuned"] == ["cso", 6, 3]
+    with pytest.raises(tr.ParameterError, match="tune"):
+        select_model(run, "E_z", SENSORS, tune="ga")
+
+
 def test_cli_model_auto(example_run1, example_run2, tmp_path, capsys):
     from thermerr_rs.cli import main
 
@@ -87,6 +108,17 @@ def test_cli_model_auto(example_run1, example_run2, tmp_path, capsys):
     board = report["selection"]["leaderboard"]
     assert len(board) == 21 and report["model"] == board[0]["model"]
     assert json.loads(out.read_text())["kind"] == board[0]["family"]
+
+
+def test_cli_model_auto_with_tune(example_run1, tmp_path, capsys):
+    from thermerr_rs.cli import main
+
+    out = tmp_path / "auto.json"
+    assert main(["fit", str(example_run1), "--axis", "E_z", "--model", "auto", "--sensors", ",".join(SENSORS),
+                 "--cv", "3", "--tune", "pso", "--pop", "4", "--iters", "2", "--out", str(out), "--json",
+                 "--no-fallbacks"]) == 0
+    board = json.loads(capsys.readouterr().out)["selection"]["leaderboard"]
+    assert len(board) == 22 and sum(e["tuned"] == ["pso", 4, 2] for e in board) == 1
 
 
 def test_cli_model_auto_draws_a_bar_on_a_terminal(example_run1, tmp_path, capsys, monkeypatch):

@@ -160,8 +160,8 @@ def _make_svr(args: argparse.Namespace, run: Run, sensors: list[str]) -> Estimat
 
     x = run_inputs(run, sensors, args.inputs, _history(args.history, run.time_s))
     res = tune_svr(x, run[args.axis], method=args.tune, cv=args.cv,
-                   cv_kind=args.cv_kind, gap=args.gap, epsilon=args.epsilon, pop=args.pop,
-                   iters=args.iters, seed=args.seed, progress=_progress_enabled(args))
+                   cv_kind=args.cv_kind, gap=args.gap, epsilon=args.epsilon, pop=args.pop or 20,
+                   iters=args.iters or 100, seed=args.seed, progress=_progress_enabled(args))
     how = (f"{args.cv} time-ordered splits (gap {args.gap})" if args.cv_kind == "time"
            else f"{args.cv} shuffled folds")
     _say(args, f"{args.tune.upper()} search: C = {res.C:.5g}, gamma = {res.gamma:.5g}, "
@@ -241,6 +241,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
         try:
             selection = select_model(run, args.axis, sensors, history=args.history, inputs=args.inputs,
                                      cv=args.cv, gap=args.gap, budget_s=args.budget, seed=args.seed,
+                                     tune=args.tune, tune_pop=args.pop or 10, tune_iters=args.iters or 10,
                                      progress=step)
         finally:
             if bar is not None:
@@ -532,15 +533,18 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--epsilon", type=float, default=0.1, help="SVR tube half-width in µm (default 0.1)")
     f.add_argument("--gamma", type=float, default=None, help="SVR RBF gamma (default: 'scale'; searched with --tune)")
     f.add_argument("--tune", choices=["cso", "pso"], default=None,
-                   help="search SVR C and gamma by cross-validated MSE with chicken swarm or particle swarm (seed 004)")
+                   help="search SVR C and gamma by cross-validated MSE with chicken swarm or particle swarm (seed 004); "
+                        "with --model auto, one more SVR candidate so tuned (per --history setting)")
     f.add_argument("--cv", type=_positive_int, default=5, help="splits of the --tune search and of --model auto (default 5)")
     f.add_argument("--cv-kind", choices=["time", "kfold"], default="time",
                    help="time: each split trains on the samples before its test block (scikit-learn's "
                         "TimeSeriesSplit, default); kfold: the seed's shuffled folds (trains on later samples too)")
     f.add_argument("--gap", type=_nonneg_int, default=0,
                    help="samples left out between training and test blocks of --cv-kind time (default 0)")
-    f.add_argument("--pop", type=_positive_int, default=20, help="swarm population of --tune (default 20)")
-    f.add_argument("--iters", type=_positive_int, default=100, help="swarm generations of --tune (default 100)")
+    f.add_argument("--pop", type=_positive_int, default=None,
+                   help="swarm population of --tune (default 20; 10 with --model auto)")
+    f.add_argument("--iters", type=_positive_int, default=None,
+                   help="swarm generations of --tune (default 100; 10 with --model auto)")
     f.add_argument("--windows", type=_positive_int, nargs="+", default=[6, 8, 10], help="GM(1,N) windows of greybp (default 6 8 10)")
     f.add_argument("--window", type=_positive_int, default=8, help="GM(1,N) window of gm1n (default 8)")
     f.add_argument("--hidden", type=_positive_int, default=None, help="hidden units of bp/greybp (7) or hybrid (30)")

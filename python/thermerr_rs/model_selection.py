@@ -36,6 +36,9 @@ from .run import Run
 #: per-sample predictions timed for a candidate's edge latency (cycling through its test rows)
 EDGE_SAMPLES = 1000
 
+#: the box of ``select_model(..., tune=...)``'s SVR search (seed 004's)
+TUNE_BOUNDS = {"C": (0.1, 100.0), "gamma": (1e-3, 1.0)}
+
 #: families :func:`select_model` knows, in the order they are tried
 FAMILIES: tuple[str, ...] = ("mlr", "rbf", "svr")
 
@@ -47,6 +50,8 @@ class Candidate:
     family: str
     params: dict[str, Any]
     history: tuple[float, ...] | None
+    #: an SVR whose C and gamma a swarm searches on the same splits: (method, pop, iters)
+    tune: tuple[str, int, int] | None = None
 
     def make(self, seed: int) -> Estimator:
         from .linear import MLR
@@ -62,18 +67,23 @@ class Candidate:
         raise ParameterError(f"unknown family {self.family!r} (known: {', '.join(FAMILIES)})")
 
     def label(self) -> str:
-        parts = [f"{k}={v}" for k, v in self.params.items() if k != "epsilon"]
+        parts = [f"{k}={v:.4g}" if isinstance(v, float) and self.tune else f"{k}={v}"
+                 for k, v in self.params.items() if k != "epsilon"]
+        if self.tune:
+            parts.append(f"tuned={self.tune[0]} {self.tune[1]}x{self.tune[2]}")
         if self.history:
             parts.append("history=" + "/".join(f"{t:g}" for t in self.history))
         return f"{self.family}({', '.join(parts)})"
 
 
-def candidates(families: Sequence[str], history: Sequence[float] | None) -> list[Candidate]:
+def candidates(families: Sequence[str], history: Sequence[float] | None,
+               tune: tuple[str, int, int] | None = None) -> list[Candidate]:
     """The fixed grid: MLR, plain and with a ridge penalty α 1 and 10 (inputs in K: a long
     history of correlated readings fitted on a short early split extrapolates wildly without
     one); RBF k-means with 10/20/40 centres × spread 0.5/1/2 (in the inputs'
-    units, K of rise); SVR with C 1/10/100 × gamma 0.01/0.1/'scale'. With ``history``, each again
-    with those time constants."""
+    units, K of rise); SVR with C 1/10/100 × gamma 0.01/0.1/'scale'; with ``tune`` (method, pop,
+    iters) and the SVR family, one more SVR whose C and gamma the swarm searches. With
+    ``history``, each again with those time constants."""
     grid: dict[str, list[dict[str, Any]]] = {
         "mlr": [{}, {"alpha": 1.0}, {"alpha": 10.0}],
         "rbf": [{"n_centers": k, "spread": s} for k in (10, 20, 40) for s in (0.5, 1.0, 2.0)],
@@ -85,7 +95,12 @@ def candidates(families: Sequence[str], history: Sequence[float] | None) -> list
     hists: list[tuple[float, ...] | None] = [None]
     if history:
         hists.append(tuple(float(t) for t in history))
-    return [Candidate(f, p, h) for h in hists for f in families for p in grid[f]]
+    out: list[Candidate] = []
+    for h in hists:
+        out += [Candidate(f, p, h) for f in families for p in grid[f]]
+        if tune is not None and "svr" in families:
+            out.append(Candidate("svr", {"epsilon": 0.1}, h, tune=tune))
+    return out
 
 
 @dataclass
@@ -101,6 +116,7 @@ class Entry:
     def as_dict(self) -> dict[str, Any]:
         return {"model": self.candidate.label(), "family": self.candidate.family,
                 "params": self.candidate.params, "history": list(self.candidate.history or []) or None,
+                "tuned": list(self.candidate.tune) if self.candidate.tune else None,
                 "cv_rms_um": self.cv_rms, "cv_rms_std_um": self.cv_rms_std, "fit_s": self.fit_s,
                 "edge_us_per_sample": self.edge_us, "predict_us_per_sample": self.predict_us}
 
@@ -151,17 +167,27 @@ class ModelSelection:
 
 def select_model(run: Run, axis: str, features: Sequence[str], *, families: Sequence[str] = FAMILIES,
                  history: Sequence[float] | None = None, inputs: str = "rise", cv: int = 5, gap: int = 0,
-                 budget_s: float | None = None, seed: int = 0,
+                 budget_s: float | None = None, seed: int = 0, tune: str | None = None,
+                 tune_pop: int = 10, tune_iters: int = 10,
                  progress: Callable[[int, int, str], None] | None = None) -> ModelSelection:
     """Score every candidate of ``families`` on time-ordered splits of ``run`` (the training run
-    only), rank them by mean held-out RMS, refit the best on the whole run and return both."""
+    only), rank them by mean held-out RMS, refit the best on the whole run and return both.
+
+    ``tune`` (``"cso"`` or ``"pso"``) adds, per history setting, an SVR whose C and γ
+    :func:`~thermerr_rs.tune_svr` searches (``tune_pop`` × ``tune_iters``, the seed's bounds
+    C ∈ [0.1, 100], γ ∈ [1e-3, 1], the search's seed ``seed``) by the mean MSE over the same
+    splits, then scored like every other candidate. Its CV RMS, like the grid's, is measured on
+    the splits it was chosen on; a search tries more points than the grid, so it is the more
+    optimistic of the two (only a held-out run says by how much)."""
     features = list(features)
     run.check_fit_columns(axis, features)
     if budget_s is not None and not budget_s > 0:
         raise ParameterError(f"budget_s must be > 0 seconds, got {budget_s}")
     y = np.asarray(run[axis], dtype=np.float64)
     splits = time_series_split(len(run), cv, gap=gap)
-    cands = candidates(families, history)
+    if tune is not None and tune not in ("cso", "pso"):
+        raise ParameterError(f"tune must be 'cso' or 'pso', got {tune!r}")
+    cands = candidates(families, history, (tune, int(tune_pop), int(tune_iters)) if tune else None)
     inputs_by_hist: dict[tuple[float, ...] | None, np.ndarray] = {}
     board: list[Entry] = []
     skipped: list[str] = []
@@ -175,6 +201,13 @@ def select_model(run: Run, axis: str, features: Sequence[str], *, families: Sequ
         if c.history not in inputs_by_hist:
             inputs_by_hist[c.history] = run_inputs(run, features, inputs, _history(c.history, run.time_s))
         x = inputs_by_hist[c.history]
+        if c.tune is not None:
+            from .swarm import tune_svr
+
+            method, pop, iters = c.tune
+            res = tune_svr(x, y, method=method, cv=splits, bounds=TUNE_BOUNDS, pop=pop, iters=iters, seed=seed,
+                           progress=False)
+            c = Candidate("svr", {"C": res.C, "gamma": res.gamma, "epsilon": 0.1}, c.history, tune=c.tune)
         rms, fit_s, pred_us = [], [], []
         for train, test in splits:
             m = c.make(seed)
