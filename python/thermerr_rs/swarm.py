@@ -143,8 +143,8 @@ def tune_svr(
     as they are (the seed's). A generation's SVR fits run natively in parallel without the GIL,
     one fold at a time (the folds that tell most per unit of work first); a point stops as soon
     as its folds so far exceed its member's memory (it cannot move it), and no (point, fold) is
-    fitted twice — neither changes the search (``n_fits`` counts what was fitted). Up to 11 585
-    rows, the squared distances are formed once for the search (16 n² bytes, at most 2 GiB) and
+    fitted twice — neither changes the search (``n_fits`` counts what was fitted). Up to 8 192
+    rows, the squared distances are formed once for the search (16 n² bytes, at most 1 GiB) and
     each fit reads them. ``warm_start=True`` starts each fold's solver from the nearest solution
     already found on that fold (within half a decade of C and γ): every solution still meets the
     stopping rule, but its last digits differ from a cold start's, so the search may take another

@@ -335,7 +335,7 @@ const STOP_MARGIN: f64 = 1e-9;
 
 /// The largest data set (in bytes of its two distance matrices, 16 n²) whose distances a search
 /// forms once and shares between its fits; above it every fit forms its kernel from the features.
-pub const SHARED_MAX_BYTES: usize = 2 << 30;
+pub const SHARED_MAX_BYTES: usize = 1 << 30;
 
 /// The cross-validated MSE of a search's points, fold by fold, each (point, fold) fitted once.
 struct FoldedObjective<'a> {
@@ -354,8 +354,14 @@ struct FoldedObjective<'a> {
 }
 
 impl<'a> FoldedObjective<'a> {
-    fn new(x: Samples<'a>, parts: &'a [Fold], splits: &'a [Split], params: &'a TuneParams) -> Self {
-        let shared = (SharedDistances::bytes(x.nrows()) <= SHARED_MAX_BYTES)
+    fn new(
+        x: Samples<'a>,
+        parts: &'a [Fold],
+        splits: &'a [Split],
+        params: &'a TuneParams,
+        max_shared_bytes: usize,
+    ) -> Self {
+        let shared = (SharedDistances::bytes(x.nrows()) <= max_shared_bytes)
             .then(|| SharedDistances::new(x));
         Self {
             parts,
@@ -580,14 +586,26 @@ pub fn tune_svr(
     y: &[f64],
     splits: &[Split],
     params: &TuneParams,
+    progress: impl FnMut(usize, f64),
+) -> Result<TuneResult> {
+    search_with(x, y, splits, params, progress, SHARED_MAX_BYTES)
+}
+
+/// [`tune_svr`] with the distances shared only up to `max_shared_bytes`.
+fn search_with(
+    x: Samples<'_>,
+    y: &[f64],
+    splits: &[Split],
+    params: &TuneParams,
     mut progress: impl FnMut(usize, f64),
+    max_shared_bytes: usize,
 ) -> Result<TuneResult> {
     x.require_finite("X")?;
     check_target(y, x.nrows())?;
     check_splits(splits, x.nrows())?;
     let bounds = params.bounds()?;
     let parts = split(x, y, splits);
-    let mut objective = FoldedObjective::new(x, &parts, splits, params);
+    let mut objective = FoldedObjective::new(x, &parts, splits, params, max_shared_bytes);
     let mut generation = 0usize;
     let mut best = f64::INFINITY;
     let eval = |pop: &[Vec<f64>], bar: &[f64]| -> Result<Vec<f64>> {
@@ -855,6 +873,18 @@ mod tests {
                     warm_start: false,
                 };
                 let r = tune_svr(s, &y, splits, &tp, |_, _| {}).unwrap();
+                // each fit forming its kernel from the rows (a data set above the sharing
+                // limit): the same search
+                let own = search_with(s, &y, splits, &tp, |_, _| {}, 0).unwrap();
+                assert_eq!(
+                    (r.c.to_bits(), r.gamma.to_bits(), r.cv_mse.to_bits(), r.cost),
+                    (
+                        own.c.to_bits(),
+                        own.gamma.to_bits(),
+                        own.cv_mse.to_bits(),
+                        own.cost
+                    )
+                );
                 // the plain search: every fold of every point
                 let parts = split(s, &y, splits);
                 let full = |pop: &[Vec<f64>]| -> Result<Vec<f64>> {
