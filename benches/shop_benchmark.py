@@ -22,7 +22,7 @@ Models, each fitted per channel on the training rows, with no tuning:
     (the README's example time constants), 5 time-ordered splits of the training rows, budget
     ``BUDGET_S`` per channel; its fit time includes the whole search and the refit.
 
-    python benches/shop_benchmark.py          # about 14 min on 2 cores (844 s on 2026-11-23)
+    python benches/shop_benchmark.py          # about 5 min on 2 cores (324 s on 2026-11-24)
     python benches/shop_benchmark.py --hidden thermal_lag   # the structure lags its sensors
 
 Seeded throughout (the case seed 1, every model seed 0): the same seed gives the same MAEs.
