@@ -121,6 +121,21 @@ def test_the_pruned_search_is_the_plain_search() -> None:
     assert res.n_fits < res.n_evals * 4
 
 
+def test_a_best_point_on_the_box_edge_is_named() -> None:
+    x, y = seed004_like(90, seed=3)
+    # a nearly linear target: the search runs into the smallest gamma and the largest C it may
+    res = tr.tune_svr(x, y, cv=4, bounds={"C": (0.1, 1.0), "gamma": (1e-3, 1e-2)}, pop=6, iters=6, seed=5,
+                      progress=False)
+    assert res.at_bounds and all("bound" in e for e in res.at_bounds), res
+    inside = tr.tune_svr(x, y, cv=4, bounds={"C": (0.1, 100.0), "gamma": (1e-3, 1.0)}, pop=8, iters=12, seed=5,
+                         progress=False)
+    def near(v: float, ends: tuple[float, float]) -> bool:
+        return any(abs(v - e) <= 1e-9 * e for e in ends)
+
+    on_edge = {"C": near(inside.C, (0.1, 100.0)), "gamma": near(inside.gamma, (1e-3, 1.0))}
+    assert {e.split(" ")[0] for e in inside.at_bounds} == {k for k, v in on_edge.items() if v}
+
+
 def test_warm_started_search_reports_the_cold_objective_and_is_deterministic() -> None:
     x, y = seed004_like(90, seed=3)
     kw = dict(cv=4, bounds={"C": (0.1, 100.0), "gamma": (1e-3, 1.0)}, pop=8, iters=12, seed=5, progress=False)

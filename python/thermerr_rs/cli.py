@@ -166,6 +166,9 @@ def _make_svr(args: argparse.Namespace, run: Run, sensors: list[str]) -> Estimat
            else f"{args.cv} shuffled folds")
     _say(args, f"{args.tune.upper()} search: C = {res.C:.5g}, gamma = {res.gamma:.5g}, "
                f"CV MSE {res.cv_mse:.4g} µm² over {how} ({res.n_evals} evaluations)")
+    if res.at_bounds:
+        _say(args, f"note: the best point is on the search box's edge ({', '.join(res.at_bounds)}): "
+                   "the optimum may lie beyond it")
     return SVR(C=res.C, epsilon=args.epsilon, gamma=res.gamma)
 
 

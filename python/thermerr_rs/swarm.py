@@ -99,7 +99,9 @@ class TuneResult:
     every fold fitted), the SVR refitted on all the data, and the (train, test) index pairs used
     (``folds``; pass them back as ``cv``). ``cv_mse`` is the objective at (``C``, ``gamma``) with
     every fold's solver started cold, as :func:`svr_cv_mse` gives it; ``history`` holds the values
-    the search saw (with ``warm_start``, those of warm-started solvers: equal to O(tol))."""
+    the search saw (with ``warm_start``, those of warm-started solvers: equal to O(tol)).
+    ``at_bounds`` names each parameter that ended on an edge of the search box (e.g.
+    ``"C = 100 (upper bound)"``): the optimum may lie beyond it, so widen ``bounds`` there."""
 
     C: float
     gamma: float
@@ -109,6 +111,7 @@ class TuneResult:
     n_fits: int
     model: SVR
     folds: Splits = field(repr=False)
+    at_bounds: tuple[str, ...] = ()
 
 
 def tune_svr(
@@ -191,7 +194,15 @@ def tune_svr(
         if bar is not None:
             bar.close()
     model = SVR._from_core(inner, x.shape[1], C=c, epsilon=epsilon, gamma=g, tol=tol)
-    return TuneResult(float(c), float(g), float(mse), np.asarray(hist), int(n), int(fits), model, folds)
+    edges = []
+    for name, v in (("C", c), ("gamma", g)):
+        lo, hi = b[name]
+        # on the log scale the edge comes back through 10**log10(bound): equal to ~1e-15
+        for bound, side in ((lo, "lower"), (hi, "upper")):
+            if abs(v - bound) <= 1e-9 * abs(bound):
+                edges.append(f"{name} = {bound:g} ({side} bound)")
+    return TuneResult(float(c), float(g), float(mse), np.asarray(hist), int(n), int(fits), model, folds,
+                      tuple(edges))
 
 
 def svr_cv_mse(X: Any, y: Any, cv: Any = 5, *, C: float, gamma: float, epsilon: float = 0.1,
