@@ -143,8 +143,8 @@ def tune_svr(
     splitter (anything with ``.split(X)``) or an iterable of ``(train, test)`` index arrays is used
     as it is. ``bounds`` ``{"C": (lo, hi), "gamma": (lo, hi)}`` (default C in
     [0.01, 1000], γ in [1e-4, 10]); ``scale="log"`` searches log10 of both, ``"linear"`` the values
-    as they are (the seed's). A generation's SVR fits run natively in parallel without the GIL,
-    one fold at a time (the folds that tell most per unit of work first); a point stops as soon
+    as they are (the seed's). A generation's points are fitted natively in parallel without the
+    GIL, each its folds in turn (those that tell most per unit of work first); a point stops as soon
     as its folds so far exceed its member's memory (it cannot move it), and no (point, fold) is
     fitted twice — neither changes the search (``n_fits`` counts what was fitted). Up to 8 192
     rows, the squared distances are formed once for the search (16 n² bytes, at most 1 GiB) and

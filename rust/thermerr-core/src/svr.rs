@@ -35,17 +35,21 @@ impl Kernel {
     #[inline]
     pub fn eval(&self, x: &[f64], sv: &[f64]) -> f64 {
         match *self {
-            Kernel::Rbf { gamma } => {
-                let mut sum = 0.0;
-                for (a, b) in x.iter().zip(sv) {
-                    let d = a - b;
-                    sum += d * d;
-                }
-                (-gamma * sum).exp()
-            }
+            Kernel::Rbf { gamma } => (-gamma * sq_diff(x, sv)).exp(),
             Kernel::Linear => dot(x, sv),
         }
     }
+}
+
+/// Σ (aᵢ − bᵢ)², summed in order: `k_function`'s squared distance.
+#[inline]
+fn sq_diff(a: &[f64], b: &[f64]) -> f64 {
+    let mut sum = 0.0;
+    for (x, y) in a.iter().zip(b) {
+        let d = x - y;
+        sum += d * d;
+    }
+    sum
 }
 
 #[inline]
@@ -468,12 +472,7 @@ impl SharedDistances {
                 for j in 0..n {
                     let xj = x.row(j);
                     t[j] = xsq[i] + xsq[j] - 2.0 * dot(xi, xj);
-                    let mut sum = 0.0;
-                    for (a, b) in xi.iter().zip(xj) {
-                        let d = a - b;
-                        sum += d * d;
-                    }
-                    p[j] = sum;
+                    p[j] = sq_diff(xi, xj);
                 }
             });
         Self { n, train, predict }
@@ -521,10 +520,6 @@ impl SvrModel {
 #[cfg(feature = "fit")]
 const FILL_CHUNK: usize = 256;
 
-/// Columns whose work (length × features) is at least this are filled in parallel.
-#[cfg(feature = "fit")]
-const PAR_FILL: usize = 1 << 30;
-
 /// Where the solver's kernel values come from: formed from the rows of the training data, or read
 /// from distances formed once for a superset of them.
 #[cfg(feature = "fit")]
@@ -542,8 +537,6 @@ enum Source<'a> {
 struct SvrQ<'a> {
     src: Source<'a>,
     l: usize,
-    /// work per kernel value (the features, or 1 for a read distance): decides parallel fills
-    work: usize,
     kernel: Kernel,
     xsq: Vec<f64>,
     /// the training rows transposed (feature-major), for the RBF's column fills
@@ -559,9 +552,9 @@ struct SvrQ<'a> {
 #[cfg(feature = "fit")]
 impl<'a> SvrQ<'a> {
     fn new(src: Source<'a>, kernel: Kernel, cache_mib: f64) -> Self {
-        let (l, work, xsq) = match &src {
-            Source::Rows(x) => (x.nrows(), x.ncols(), x.rows().map(|r| dot(r, r)).collect()),
-            Source::Shared { rows, .. } => (rows.len(), 1, Vec::new()),
+        let (l, xsq) = match &src {
+            Source::Rows(x) => (x.nrows(), x.rows().map(|r| dot(r, r)).collect()),
+            Source::Shared { rows, .. } => (rows.len(), Vec::new()),
         };
         let xt = match (&src, kernel) {
             (Source::Rows(x), Kernel::Rbf { .. }) => {
@@ -579,7 +572,6 @@ impl<'a> SvrQ<'a> {
         let mut q = SvrQ {
             src,
             l,
-            work,
             kernel,
             xsq,
             xt,
@@ -674,15 +666,10 @@ impl<'a> SvrQ<'a> {
     fn col(&mut self, i: usize) -> usize {
         let real = self.index[i];
         if !self.cache.has(real) {
-            let l = self.l;
-            let mut row = self.cache.take_slot(l);
-            let this = &*self;
-            let fill = |(c, out): (usize, &mut [f32])| this.fill(real, c * FILL_CHUNK, out);
-            if l * self.work >= PAR_FILL {
-                use rayon::prelude::*;
-                row.par_chunks_mut(FILL_CHUNK).enumerate().for_each(fill);
-            } else {
-                row.chunks_mut(FILL_CHUNK).enumerate().for_each(fill);
+            // on this thread: a rayon split per column cost more in wake-ups than it saved
+            let mut row = self.cache.take_slot(self.l);
+            for (c, out) in row.chunks_mut(FILL_CHUNK).enumerate() {
+                self.fill(real, c * FILL_CHUNK, out);
             }
             self.cache.put(real, row);
         } else {

@@ -2,9 +2,9 @@
 //! (C, γ), minimising the cross-validated mean squared error over explicit (train, test) splits:
 //! time-ordered ones ([`time_series_split`], scikit-learn's `TimeSeriesSplit`) for runs, or the
 //! shuffled k-fold ones of the seed ([`kfold_splits`]). The objective is evaluated
-//! natively: each generation's SVR fits run in parallel (rayon), one fold at a time, cheapest
-//! training set first; a point stops as soon as its folds so far prove it cannot beat its
-//! member's memory, and every (point, fold) is fitted once per search. Both are exact: the
+//! natively: a generation's points in parallel (rayon), each fitting its folds in turn (those
+//! that tell most per unit of work first); a point stops as soon as its folds so far prove it
+//! cannot beat its member's memory, and every (point, fold) is fitted once per search. Both are exact: the
 //! search takes the same path to the same result as with every fold of every point fitted
 //! ([`SearchCost`] counts what was fitted).
 
