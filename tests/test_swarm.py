@@ -156,3 +156,52 @@ def test_tune_svr_refuses_bad_input() -> None:
         tr.tune_svr(x, y, method="ga", progress=False)
     with pytest.raises(ParameterError, match="C"):
         tr.tune_svr(x, y, bounds={"C": (0.0, 1.0)}, progress=False)
+
+
+def run_like(n: int = 2400, seed: int = 0):
+    """A run-like series: two slow temperatures with noise and a drift that lags one of them."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(n) / n
+    temps = np.column_stack([np.sin(6 * t) + 0.5 * t, np.cos(3 * t) * t])
+    x = temps + rng.normal(0, 0.01, temps.shape)
+    y = 4 * temps[:, 0] + 2 * np.tanh(temps[:, 1]) + rng.normal(0, 0.05, n)
+    return x, y
+
+
+def test_a_thinned_search_reports_the_full_objective_at_its_point() -> None:
+    x, y = run_like()
+    # 4 time-ordered splits of 2 400 rows: the largest trains on 1 920, so "auto" takes every 2nd
+    r = tr.tune_svr(x, y, cv=4, pop=6, iters=4, seed=3, progress=False)
+    assert r.thin == 2
+    # the reported CV MSE is the objective on every row at the returned point, as svr_cv_mse
+    # (and so scikit-learn's cross_val_score) gives it
+    assert r.cv_mse == tr.svr_cv_mse(x, y, r.folds, C=r.C, gamma=r.gamma)
+    sk = -cross_val_score(SkSVR(C=r.C, gamma=r.gamma), x, y, cv=r.folds,
+                          scoring="neg_mean_squared_error").mean()
+    assert r.cv_mse == pytest.approx(sk, rel=1e-6)  # O(tol) differences of two SMO solutions
+    again = tr.tune_svr(x, y, cv=4, pop=6, iters=4, seed=3, progress=False)
+    assert (again.C, again.gamma, again.cv_mse) == (r.C, r.gamma, r.cv_mse)
+    # the refitted model is the SVR at that point on every row
+    ref = tr.SVR(C=r.C, gamma=r.gamma).fit(x, y)
+    np.testing.assert_array_equal(r.model.predict(x[:50]), ref.predict(x[:50]))
+
+
+def test_thin_one_is_the_plain_search_and_small_runs_are_not_thinned() -> None:
+    x, y = run_like(600)
+    plain = tr.tune_svr(x, y, pop=6, iters=3, seed=1, progress=False, thin=1, warm_start=False)
+    one = tr.tune_svr(x, y, pop=6, iters=3, seed=1, progress=False, thin=1)
+    auto = tr.tune_svr(x, y, pop=6, iters=3, seed=1, progress=False)
+    assert plain.thin == one.thin == auto.thin == 1
+    for r in (one, auto):
+        assert (r.C, r.gamma, r.cv_mse, r.n_fits) == (plain.C, plain.gamma, plain.cv_mse, plain.n_fits)
+        np.testing.assert_array_equal(r.history, plain.history)
+
+
+def test_bad_thinning_is_one_parameter_error() -> None:
+    x, y = seed004_like()
+    for bad in (0, -2, "half"):
+        with pytest.raises(ParameterError, match="thin"):
+            tr.tune_svr(x, y, thin=bad, progress=False)
+    # 60 rows in 5 time-ordered splits: every 50th row is row 0 or 50, no test row in fold 0
+    with pytest.raises(ParameterError, match="fold 0 without a test row"):
+        tr.tune_svr(x, y, thin=50, progress=False)

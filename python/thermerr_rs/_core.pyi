@@ -293,9 +293,10 @@ def tune_svr(
     c2: float = 1.49618,
     vmax_frac: float = 0.2,
     seed: int = 0,
-    warm_start: bool = False,
+    warm_start: bool | None = None,
+    thin: int | None = None,
     progress: Any = None,
-) -> tuple[float, float, float, list[float], int, int, SvrModel]: ...
+) -> tuple[float, float, float, list[float], int, int, int, SvrModel]: ...
 
 # --- seed 002: grey models and BP networks -------------------------------------------------------
 @final

@@ -99,6 +99,16 @@ _positive_int = _int_at_least(1)
 _nonneg_int = _int_at_least(0)
 
 
+def _thin(text: str) -> int | str:
+    """An argparse type for --thin: 'auto' or a whole number >= 1."""
+    if text == "auto":
+        return text
+    try:
+        return _positive_int(text)
+    except argparse.ArgumentTypeError as e:
+        raise argparse.ArgumentTypeError(f"must be 'auto' or a whole number >= 1 ({e})") from None
+
+
 def _taus(text: str) -> list[float]:
     """An argparse type: comma-separated time constants in seconds, each > 0."""
     try:
@@ -161,11 +171,13 @@ def _make_svr(args: argparse.Namespace, run: Run, sensors: list[str]) -> Estimat
     x = run_inputs(run, sensors, args.inputs, _history(args.history, run.time_s))
     res = tune_svr(x, run[args.axis], method=args.tune, cv=args.cv,
                    cv_kind=args.cv_kind, gap=args.gap, epsilon=args.epsilon, pop=args.pop or 20,
-                   iters=args.iters or 100, seed=args.seed, progress=_progress_enabled(args))
+                   iters=args.iters or 100, seed=args.seed, thin=args.thin, progress=_progress_enabled(args))
     how = (f"{args.cv} time-ordered splits (gap {args.gap})" if args.cv_kind == "time"
            else f"{args.cv} shuffled folds")
+    thinned = (f"; searched on one row in {res.thin}, its best points scored on every row"
+               if res.thin > 1 else "")
     _say(args, f"{args.tune.upper()} search: C = {res.C:.5g}, gamma = {res.gamma:.5g}, "
-               f"CV MSE {res.cv_mse:.4g} µm² over {how} ({res.n_evals} evaluations)")
+               f"CV MSE {res.cv_mse:.4g} µm² over {how} ({res.n_evals} evaluations{thinned})")
     if res.at_bounds:
         _say(args, f"note: the best point is on the search box's edge ({', '.join(res.at_bounds)}): "
                    "the optimum may lie beyond it")
@@ -548,6 +560,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="swarm population of --tune (default 20; 10 with --model auto)")
     f.add_argument("--iters", type=_positive_int, default=None,
                    help="swarm generations of --tune (default 100; 10 with --model auto)")
+    f.add_argument("--thin", type=_thin, default="auto",
+                   help="--tune searches on every k-th row, then scores its best points on every row: "
+                        "'auto' (default: at most 1000 training rows per split) or k (1: every row)")
     f.add_argument("--windows", type=_positive_int, nargs="+", default=[6, 8, 10], help="GM(1,N) windows of greybp (default 6 8 10)")
     f.add_argument("--window", type=_positive_int, default=8, help="GM(1,N) window of gm1n (default 8)")
     f.add_argument("--hidden", type=_positive_int, default=None, help="hidden units of bp/greybp (7) or hybrid (30)")

@@ -101,7 +101,10 @@ class TuneResult:
     every fold's solver started cold, as :func:`svr_cv_mse` gives it; ``history`` holds the values
     the search saw (with ``warm_start``, those of warm-started solvers: equal to O(tol)).
     ``at_bounds`` names each parameter that ended on an edge of the search box (e.g.
-    ``"C = 100 (upper bound)"``): the optimum may lie beyond it, so widen ``bounds`` there."""
+    ``"C = 100 (upper bound)"``): the optimum may lie beyond it, so widen ``bounds`` there.
+    ``thin`` is the thinning the search ran with (1: every row; see :func:`tune_svr`); after a
+    thinned search ``history`` holds the thinned objective's values and ``cv_mse`` the full
+    one's at the returned point."""
 
     C: float
     gamma: float
@@ -112,6 +115,7 @@ class TuneResult:
     model: SVR
     folds: Splits = field(repr=False)
     at_bounds: tuple[str, ...] = ()
+    thin: int = 1
 
 
 def tune_svr(
@@ -129,7 +133,8 @@ def tune_svr(
     pop: int = 20,
     iters: int = 100,
     seed: int = 0,
-    warm_start: bool = False,
+    warm_start: bool | None = None,
+    thin: int | str = "auto",
     progress: bool | None = None,
     **swarm: Any,
 ) -> TuneResult:
@@ -151,7 +156,19 @@ def tune_svr(
     each fit reads them. ``warm_start=True`` starts each fold's solver from the nearest solution
     already found on that fold (within half a decade of C and γ): every solution still meets the
     stopping rule, but its last digits differ from a cold start's, so the search may take another
-    path; ``False`` gives the plain search bit for bit. A progress bar shows on a terminal unless
+    path; ``False`` gives the plain search bit for bit; ``None`` (the default) warm-starts only the
+    first stage of a thinned search, which only ranks points.
+
+    ``thin`` (an int ``k`` ≥ 1, or ``"auto"``): with ``k`` > 1 the swarm runs on every ``k``-th row
+    (rows 0, k, 2k, …; each split keeps its rows among them) and each of its fits takes C·k, so
+    that the loss summed over a k-th of the rows weighs as the whole sum; then the 16 best points
+    it fitted on every fold are scored on every row, cold, and the best of them is returned with
+    that CV MSE — the objective :func:`svr_cv_mse` gives at the returned point (``history`` holds
+    the thinned search's values). ``"auto"`` (the default) thins so that the largest training set
+    has at most 1 000 rows, and not at all up to that; ``thin=1`` is the plain search on every
+    row. Neighbouring rows of a run sampled every few seconds carry nearly the same information,
+    so the thinned objective ranks (C, γ) much as the full one does, at a fraction of the cost
+    (docs/methods.md has the measurements). A progress bar shows on a terminal unless
     ``progress=False``. Extra keywords go to the swarm (``G``, ``roosters``, ``hens``, ``fl``,
     ``w``, ``c1``, ``c2``, ``vmax_frac``).
     """
@@ -171,6 +188,14 @@ def tune_svr(
         if k not in known:
             raise ParameterError(f"tune_svr got an unknown keyword {k!r}")
         extra[known[k]] = v
+    if isinstance(thin, str):
+        if thin != "auto":
+            raise ParameterError(f"invalid parameter `thin`: must be \"auto\" or an int >= 1, got {thin!r}")
+        k_thin: int | None = None
+    else:
+        k_thin = int(thin)
+        if k_thin < 1:
+            raise ParameterError(f"invalid parameter `thin`: must be \"auto\" or an int >= 1, got {thin!r}")
     show = sys.stderr.isatty() if progress is None else progress
     bar: Any = None
     cb = None
@@ -184,11 +209,11 @@ def tune_svr(
             bar.update(1)
 
     try:
-        c, g, mse, hist, n, fits, inner = _core.tune_svr(
+        c, g, mse, hist, n, fits, used, inner = _core.tune_svr(
             x, yv, folds, method=method, c_bounds=(float(b["C"][0]), float(b["C"][1])),
             gamma_bounds=(float(b["gamma"][0]), float(b["gamma"][1])), scale=scale, epsilon=float(epsilon),
-            tol=float(tol), pop=int(pop), iters=int(iters), seed=int(seed), warm_start=bool(warm_start),
-            progress=cb, **extra,
+            tol=float(tol), pop=int(pop), iters=int(iters), seed=int(seed), warm_start=None if warm_start is None else bool(warm_start),
+            thin=k_thin, progress=cb, **extra,
         )
     finally:
         if bar is not None:
@@ -202,7 +227,7 @@ def tune_svr(
             if abs(v - bound) <= 1e-9 * abs(bound):
                 edges.append(f"{name} = {bound:g} ({side} bound)")
     return TuneResult(float(c), float(g), float(mse), np.asarray(hist), int(n), int(fits), model, folds,
-                      tuple(edges))
+                      tuple(edges), int(used))
 
 
 def svr_cv_mse(X: Any, y: Any, cv: Any = 5, *, C: float, gamma: float, epsilon: float = 0.1,

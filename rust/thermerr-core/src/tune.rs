@@ -46,9 +46,25 @@ pub struct TuneParams {
     /// Start each fold's SMO from the solution of the nearest point already fitted on that fold
     /// (within [`WARM_RADIUS`] decades of C and γ): fewer iterations, each solution as optimal
     /// within `tol` as a cold start's but not the same bits, so the search's path may differ in
-    /// the last digits. `false`: the plain search's path, bit for bit.
-    pub warm_start: bool,
+    /// the last digits. `Some(false)`: the plain search's path, bit for bit. `None`: warm starts
+    /// in a thinned search's first stage (which only ranks points; the result is scored cold on
+    /// every row), not in a search on every row ([`TuneParams::warm`]).
+    pub warm_start: Option<bool>,
+    /// Search on every `thin`-th row (1: every row, the plain search). With `thin` k > 1 the swarm
+    /// runs on rows 0, k, 2k, … of the data, each split keeping its rows among them, and every
+    /// fit there takes C·k (the ε-insensitive loss summed over a k-th of the rows, weighted as
+    /// the whole sum); then the [`REFINE`] best points it fitted on every fold are scored on
+    /// every row and the best of them is the result. [`auto_thin`] chooses k from the splits.
+    pub thin: usize,
 }
+
+/// Training rows of the largest split that [`auto_thin`] aims at: each fit of a thinned search
+/// trains on about this many rows.
+pub const THIN_ROWS: usize = 1000;
+
+/// Points a thinned search scores on every row: its best, by the thinned objective, of those it
+/// fitted on every fold.
+pub const REFINE: usize = 16;
 
 /// How far (Euclidean, in decades of C and γ) a fitted point may be from a new one to start its
 /// solver from.
@@ -82,6 +98,8 @@ pub struct TuneResult {
     pub cost: SearchCost,
     /// The SVR refitted on all the data with (c, gamma).
     pub model: SvrModel,
+    /// The thinning the search ran with (1: every row).
+    pub thin: usize,
 }
 
 /// How many fold fits a search did (`fits`) against the `n_evals × folds` of a search that fits
@@ -267,6 +285,71 @@ pub fn check_splits(splits: &[Split], n: usize) -> Result<()> {
     Ok(())
 }
 
+/// The thinning of a search over `splits` (see [`TuneParams::thin`]): the smallest k that brings
+/// the largest training set to at most [`THIN_ROWS`] rows, or less where a split would keep fewer
+/// than two training rows or no test row; 1 (no thinning) up to [`THIN_ROWS`] training rows.
+pub fn auto_thin(splits: &[Split]) -> usize {
+    let most = splits.iter().map(|s| s.train.len()).max().unwrap_or(0);
+    let mut k = most.div_ceil(THIN_ROWS).max(1);
+    while k > 1
+        && !splits
+            .iter()
+            .all(|s| kept(&s.train, k) >= 2 && kept(&s.test, k) >= 1)
+    {
+        k -= 1;
+    }
+    k
+}
+
+/// How many of `idx` are on the stride k (rows 0, k, 2k, …).
+fn kept(idx: &[usize], k: usize) -> usize {
+    idx.iter().filter(|&&i| i % k == 0).count()
+}
+
+/// The data and splits of a search on every k-th row: rows 0, k, 2k, … of `x`, `y`, and each
+/// split's indices on the stride, renumbered, in their order. A split left without a training or
+/// test row is a [`Error::InvalidParam`] naming it.
+fn thinned(
+    x: Samples<'_>,
+    y: &[f64],
+    splits: &[Split],
+    k: usize,
+) -> Result<(Vec<f64>, Vec<f64>, Vec<Split>)> {
+    let rows: Vec<usize> = (0..x.nrows()).step_by(k).collect();
+    let mut xs = Vec::with_capacity(rows.len() * x.ncols());
+    rows.iter().for_each(|&i| xs.extend_from_slice(x.row(i)));
+    let ys = rows.iter().map(|&i| y[i]).collect();
+    let on = |idx: &[usize]| -> Vec<usize> {
+        idx.iter()
+            .filter(|&&i| i % k == 0)
+            .map(|&i| i / k)
+            .collect()
+    };
+    let out: Vec<Split> = splits
+        .iter()
+        .map(|s| Split {
+            train: on(&s.train),
+            test: on(&s.test),
+        })
+        .collect();
+    for (j, s) in out.iter().enumerate() {
+        if s.train.is_empty() || s.test.is_empty() {
+            return Err(Error::param(
+                "thin",
+                format!(
+                    "every {k}th row leaves fold {j} without a {} row; use a smaller thin",
+                    if s.train.is_empty() {
+                        "training"
+                    } else {
+                        "test"
+                    }
+                ),
+            ));
+        }
+    }
+    Ok((xs, ys, out))
+}
+
 /// Training and test sets of one fold.
 struct Fold {
     x_train: Vec<f64>,
@@ -344,6 +427,8 @@ struct FoldedObjective<'a> {
     x: Samples<'a>,
     shared: Option<SharedDistances>,
     params: &'a TuneParams,
+    /// every fit takes C times this (the thinning of a thinned search's first stage)
+    c_scale: f64,
     /// per point (C, γ bits): each fold's MSE, NaN while not fitted
     seen: HashMap<[u64; 2], Vec<f64>>,
     /// the point with the smallest mean over all folds so far
@@ -359,6 +444,7 @@ impl<'a> FoldedObjective<'a> {
         parts: &'a [Fold],
         splits: &'a [Split],
         params: &'a TuneParams,
+        c_scale: f64,
         max_shared_bytes: usize,
     ) -> Self {
         let shared = (SharedDistances::bytes(x.nrows()) <= max_shared_bytes)
@@ -369,6 +455,7 @@ impl<'a> FoldedObjective<'a> {
             x,
             shared,
             params,
+            c_scale,
             seen: HashMap::new(),
             best: None,
             solved: (0..parts.len()).map(|_| Vec::new()).collect(),
@@ -380,7 +467,7 @@ impl<'a> FoldedObjective<'a> {
     /// started from the nearest solution on the fold with `warm_start`; with the new solution to
     /// keep for later starts.
     fn fold(&self, j: usize, c: f64, gamma: f64, warm_start: bool) -> (f64, Option<Solved>) {
-        let (f, svr) = (&self.parts[j], self.params.svr_at(c, gamma));
+        let (f, svr) = (&self.parts[j], self.params.svr_at(c * self.c_scale, gamma));
         let Some(sh) = &self.shared else {
             return (fold_mse(f, self.x.ncols(), &svr), None);
         };
@@ -402,20 +489,45 @@ impl<'a> FoldedObjective<'a> {
             for (&k, &b) in m.support.iter().zip(&m.dual_coef) {
                 beta[k] = b;
             }
-            Solved { at, c, beta }
+            Solved {
+                at,
+                c: c * self.c_scale,
+                beta,
+            }
         });
         let pred = model.map(|m| m.predict_shared(&s.test, &s.train, sh));
         (mse_of(pred, &f.y_test), solved)
     }
 
-    /// The mean over the folds at (c, γ) with every solver started cold: the objective as
-    /// [`cv_mse`] computes it (the same bits), for the point a warm-started search returns.
-    fn cold_mean(&self, c: f64, gamma: f64) -> f64 {
-        let per: Vec<f64> = (0..self.parts.len())
+    /// The mean over the folds at each point (c, γ) with every solver started cold: the
+    /// objective as [`cv_mse`] computes it (the same bits); every (point, fold) in parallel.
+    fn cold_means(&self, pts: &[(f64, f64)]) -> Vec<f64> {
+        let nf = self.parts.len();
+        let per: Vec<f64> = (0..pts.len() * nf)
             .into_par_iter()
-            .map(|j| self.fold(j, c, gamma, false).0)
+            .map(|t| {
+                let (c, g) = pts[t / nf];
+                self.fold(t % nf, c, g, false).0
+            })
             .collect();
-        fold_mean(&per)
+        per.chunks(nf.max(1)).map(fold_mean).collect()
+    }
+
+    /// The points fitted on every fold, by their mean, best first: `(C, γ, mean)`.
+    fn complete(&self) -> Vec<(f64, f64, f64)> {
+        let mut out: Vec<(f64, f64, f64)> = self
+            .seen
+            .iter()
+            .filter(|(_, per)| per.iter().all(|m| !m.is_nan()))
+            .map(|(k, per)| (f64::from_bits(k[0]), f64::from_bits(k[1]), fold_mean(per)))
+            .collect();
+        // ties by the point itself: the same order whatever the hash map's
+        out.sort_by(|a, b| {
+            a.2.total_cmp(&b.2)
+                .then(a.0.total_cmp(&b.0))
+                .then(a.1.total_cmp(&b.1))
+        });
+        out
     }
 
     /// The order to fit folds in: the most of the best point's error per unit of work first
@@ -468,7 +580,7 @@ impl<'a> FoldedObjective<'a> {
                 let (mut sum, mut solved, mut fits) = (0.0, Vec::new(), 0);
                 for &j in &order {
                     if per[j].is_nan() {
-                        let (m, w) = this.fold(j, c, g, this.params.warm_start);
+                        let (m, w) = this.fold(j, c, g, this.params.warm());
                         per[j] = m;
                         fits += 1;
                         solved.extend(w.map(|w| (j, w)));
@@ -549,6 +661,11 @@ impl TuneParams {
             .kernel(KernelKind::Rbf)
     }
 
+    /// Whether the search starts fold solvers warm: as asked, else only in a thinned search.
+    pub fn warm(&self) -> bool {
+        self.warm_start.unwrap_or(self.thin > 1)
+    }
+
     fn decode(&self, v: &[f64]) -> (f64, f64) {
         match self.scale {
             Scale::Linear => (v[0], v[1]),
@@ -604,32 +721,59 @@ fn search_with(
     check_target(y, x.nrows())?;
     check_splits(splits, x.nrows())?;
     let bounds = params.bounds()?;
+    let k = params.thin;
+    if k == 0 {
+        return Err(Error::param("thin", "must be at least 1 (1: every row)"));
+    }
     let parts = split(x, y, splits);
-    let mut objective = FoldedObjective::new(x, &parts, splits, params, max_shared_bytes);
-    let mut generation = 0usize;
-    let mut best = f64::INFINITY;
-    let eval = |pop: &[Vec<f64>], bar: &[f64]| -> Result<Vec<f64>> {
-        let out = objective.eval(pop, bar)?;
-        best = out.iter().copied().fold(best, f64::min);
-        progress(generation, best);
-        generation += 1;
-        Ok(out)
-    };
-    let res = match &params.search {
-        Search::Cso(p) => cso_minimize_pruned(eval, &bounds, p)?,
-        Search::Pso(p) => pso_minimize_pruned(eval, &bounds, p)?,
-    };
-    let cost = objective.cost;
-    let (c, gamma) = params.decode(&res.x);
-    // a warm-started solution differs from a cold one in the last digits: report the objective
-    // at the point as anyone recomputing it gets it
-    let cv_mse = if params.warm_start && res.f.is_finite() {
-        objective.cold_mean(c, gamma)
+    let nf = splits.len();
+    let (c, gamma, cv_mse, history, n_evals, cost) = if k == 1 {
+        let mut objective = FoldedObjective::new(x, &parts, splits, params, 1.0, max_shared_bytes);
+        let res = run_swarm(&mut objective, &bounds, params, &mut progress)?;
+        let (c, gamma) = params.decode(&res.x);
+        // a warm-started solution differs from a cold one in the last digits: report the
+        // objective at the point as anyone recomputing it gets it
+        let cv_mse = if params.warm() && res.f.is_finite() {
+            objective.cold_means(&[(c, gamma)])[0]
+        } else {
+            res.f
+        };
+        (c, gamma, cv_mse, res.history, res.n_evals, objective.cost)
     } else {
-        res.f
+        // first stage: the swarm on every k-th row, C scaled by k
+        let (tx, ty, tsplits) = thinned(x, y, splits, k)?;
+        let ts = Samples::new(&tx, ty.len(), x.ncols())?;
+        let tparts = split(ts, &ty, &tsplits);
+        let mut coarse =
+            FoldedObjective::new(ts, &tparts, &tsplits, params, k as f64, max_shared_bytes);
+        let res = run_swarm(&mut coarse, &bounds, params, &mut progress)?;
+        let pts: Vec<(f64, f64)> = coarse
+            .complete()
+            .into_iter()
+            .filter(|p| p.2.is_finite())
+            .take(REFINE)
+            .map(|p| (p.0, p.1))
+            .collect();
+        let stage1 = coarse.cost;
+        drop(coarse);
+        // second stage: those points on every row, cold; the first best in the first stage's
+        // order
+        let fine = FoldedObjective::new(x, &parts, splits, params, 1.0, max_shared_bytes);
+        let means = fine.cold_means(&pts);
+        crate::interrupt::check()?;
+        let best = (0..pts.len()).min_by(|&a, &b| means[a].total_cmp(&means[b]));
+        let (c, gamma, cv_mse) = match best {
+            Some(i) => (pts[i].0, pts[i].1, means[i]),
+            None => (f64::NAN, f64::NAN, f64::INFINITY),
+        };
+        let cost = SearchCost {
+            fits: stage1.fits + pts.len() * nf,
+            full: stage1.full + pts.len() * nf,
+        };
+        (c, gamma, cv_mse, res.history, res.n_evals + pts.len(), cost)
     };
     crate::interrupt::check()?;
-    if !res.f.is_finite() {
+    if !cv_mse.is_finite() {
         return Err(Error::Numerical(
             "no (C, gamma) in the bounds gave a finite cross-validated error".into(),
         ));
@@ -639,11 +783,35 @@ fn search_with(
         c,
         gamma,
         cv_mse,
-        history: res.history,
-        n_evals: res.n_evals,
+        history,
+        n_evals,
         cost,
         model,
+        thin: k,
     })
+}
+
+/// The swarm of `params` over `bounds` on `objective`; `progress(generation, best_so_far)` after
+/// the initial population (generation 0) and after every generation.
+fn run_swarm(
+    objective: &mut FoldedObjective<'_>,
+    bounds: &Bounds,
+    params: &TuneParams,
+    progress: &mut impl FnMut(usize, f64),
+) -> Result<crate::swarm::SwarmResult> {
+    let mut generation = 0usize;
+    let mut best = f64::INFINITY;
+    let eval = |pop: &[Vec<f64>], bar: &[f64]| -> Result<Vec<f64>> {
+        let out = objective.eval(pop, bar)?;
+        best = out.iter().copied().fold(best, f64::min);
+        progress(generation, best);
+        generation += 1;
+        Ok(out)
+    };
+    match &params.search {
+        Search::Cso(p) => cso_minimize_pruned(eval, bounds, p),
+        Search::Pso(p) => pso_minimize_pruned(eval, bounds, p),
+    }
 }
 
 #[cfg(test)]
@@ -819,7 +987,8 @@ mod tests {
                 seed: 7,
                 ..Default::default()
             }),
-            warm_start: true,
+            warm_start: Some(true),
+            thin: 1,
         };
         let mut calls = 0;
         let r = tune_svr(s, &y, &folds, &tp, |_, _| calls += 1).unwrap();
@@ -870,7 +1039,8 @@ mod tests {
                     gamma_bounds: (1e-3, 1.0),
                     scale: Scale::Log,
                     search: search.clone(),
-                    warm_start: false,
+                    warm_start: Some(false),
+                    thin: 1,
                 };
                 let r = tune_svr(s, &y, splits, &tp, |_, _| {}).unwrap();
                 // each fit forming its kernel from the rows (a data set above the sharing
@@ -916,6 +1086,87 @@ mod tests {
                 assert_eq!(r.cost.full, plain.n_evals * splits.len());
                 assert!(r.cost.fits < r.cost.full, "{:?}", r.cost);
             }
+        }
+    }
+
+    #[test]
+    fn thinning_keeps_every_kth_row_and_names_an_emptied_fold() {
+        let n = 20;
+        let (x, y) = curve(n);
+        let s = Samples::new(&x, n, 3).unwrap();
+        // test blocks 5..10, 10..15, 15..20, each trained on the rows before it
+        let splits = time_series_split(n, 3, 0, None, None).unwrap();
+        let (tx, ty, ts) = thinned(s, &y, &splits, 3).unwrap();
+        let rows = [0, 3, 6, 9, 12, 15, 18];
+        assert_eq!(ty, rows.map(|i| y[i]));
+        assert_eq!(&tx[2 * 3..3 * 3], s.row(6));
+        // train 0..5 -> rows 0, 3 -> 0, 1; test 5..10 -> rows 6, 9 -> 2, 3
+        assert_eq!(
+            ts[0],
+            Split {
+                train: vec![0, 1],
+                test: vec![2, 3]
+            }
+        );
+        assert_eq!(ts[2].train, vec![0, 1, 2, 3, 4]);
+        // every 7th row: 0, 7, 14, none in the last test block 15..20
+        let e = thinned(s, &y, &splits, 7).unwrap_err().to_string();
+        assert!(e.contains("fold 2 without a test row"), "{e}");
+    }
+
+    #[test]
+    fn auto_thin_aims_at_thin_rows_and_keeps_every_split_whole() {
+        let at = |train: usize, test: Vec<usize>| Split {
+            train: (0..train).collect(),
+            test,
+        };
+        assert_eq!(auto_thin(&[at(THIN_ROWS, vec![THIN_ROWS])]), 1);
+        assert_eq!(auto_thin(&[at(THIN_ROWS + 1, vec![THIN_ROWS + 2])]), 2);
+        let six = time_series_split(6000, 5, 0, None, None).unwrap();
+        assert_eq!(auto_thin(&six), 5); // largest training set 5 000 rows
+                                        // a one-row test block off every stride k <= 3 except 1
+        assert_eq!(auto_thin(&[at(3 * THIN_ROWS, vec![3 * THIN_ROWS + 1])]), 1);
+    }
+
+    /// A thinned search reports the objective on every row at its point (what cv_mse gives,
+    /// bit for bit), the same on every run, and a point better than the box's corners. (How
+    /// close it comes to the plain search is measured on the shop run: docs/methods.md.)
+    #[test]
+    fn a_thinned_search_reports_the_full_objective_at_its_point() {
+        let n = 400;
+        let (x, y) = curve(n);
+        let s = Samples::new(&x, n, 3).unwrap();
+        let splits = time_series_split(n, 4, 0, None, None).unwrap();
+        let tp = |thin: usize| TuneParams {
+            svr: SvrParams::default(),
+            c_bounds: (0.01, 100.0),
+            gamma_bounds: (1e-3, 10.0),
+            scale: Scale::Log,
+            search: Search::Cso(CsoParams {
+                pop: 10,
+                iters: 15,
+                seed: 5,
+                ..Default::default()
+            }),
+            warm_start: None,
+            thin,
+        };
+        let r = tune_svr(s, &y, &splits, &tp(4), |_, _| {}).unwrap();
+        assert_eq!(r.thin, 4);
+        let direct = cv_mse(s, &y, &splits, &tp(4).svr_at(r.c, r.gamma)).unwrap();
+        assert_eq!(direct.to_bits(), r.cv_mse.to_bits());
+        let again = tune_svr(s, &y, &splits, &tp(4), |_, _| {}).unwrap();
+        assert_eq!(
+            (r.c.to_bits(), r.gamma.to_bits(), r.cv_mse.to_bits()),
+            (
+                again.c.to_bits(),
+                again.gamma.to_bits(),
+                again.cv_mse.to_bits()
+            )
+        );
+        for (c, g) in [(0.01, 1e-3), (100.0, 10.0), (0.01, 10.0), (100.0, 1e-3)] {
+            let corner = cv_mse(s, &y, &splits, &tp(1).svr_at(c, g)).unwrap();
+            assert!(r.cv_mse < corner, "{} vs corner {corner}", r.cv_mse);
         }
     }
 }

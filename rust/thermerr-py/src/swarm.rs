@@ -260,11 +260,12 @@ fn svr_cv_mse(
 }
 
 /// Native CSO/PSO search of (C, gamma) by the CV MSE over (train, test) splits; returns
-/// (C, gamma, cv_mse, history, n_evals, n_fits, model): n_fits the fold fits done (each point met
-/// before, or stopped early, costs fewer than its folds). `progress(generation, best)` is called after
+/// (C, gamma, cv_mse, history, n_evals, n_fits, thin, model): n_fits the fold fits done (each point
+/// met before, or stopped early, costs fewer than its folds); `thin` None: the core's
+/// `auto_thin` of the splits. `progress(generation, best)` is called after
 /// each generation (with the GIL), if given.
 #[pyfunction]
-#[pyo3(signature = (x, y, splits, *, method = "cso", c_bounds = (0.01, 1000.0), gamma_bounds = (1e-4, 10.0), scale = "log", epsilon = 0.1, tol = 1e-3, pop = 20, iters = 100, g = 10, roosters = 0.2, hens = 0.6, fl = (0.4, 1.0), w = 0.7298, c1 = 1.49618, c2 = 1.49618, vmax_frac = 0.2, seed = 0, warm_start = false, progress = None))]
+#[pyo3(signature = (x, y, splits, *, method = "cso", c_bounds = (0.01, 1000.0), gamma_bounds = (1e-4, 10.0), scale = "log", epsilon = 0.1, tol = 1e-3, pop = 20, iters = 100, g = 10, roosters = 0.2, hens = 0.6, fl = (0.4, 1.0), w = 0.7298, c1 = 1.49618, c2 = 1.49618, vmax_frac = 0.2, seed = 0, warm_start = None, thin = None, progress = None))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn tune_svr(
     py: Python<'_>,
@@ -288,9 +289,10 @@ fn tune_svr(
     c2: f64,
     vmax_frac: f64,
     seed: u64,
-    warm_start: bool,
+    warm_start: Option<bool>,
+    thin: Option<usize>,
     progress: Option<Py<PyAny>>,
-) -> PyResult<(f64, f64, f64, Vec<f64>, usize, usize, PySvrModel)> {
+) -> PyResult<(f64, f64, f64, Vec<f64>, usize, usize, usize, PySvrModel)> {
     let search = match self::method(
         method, pop, iters, g, roosters, hens, fl, w, c1, c2, vmax_frac, seed,
     )? {
@@ -308,6 +310,8 @@ fn tune_svr(
             .into())
         }
     };
+    let (xs, ys) = (samples(&x)?, slice1(&y)?);
+    let splits = from_pairs(splits);
     let tp = TuneParams {
         svr: SvrParams::new().epsilon(epsilon).tol(tol),
         c_bounds,
@@ -315,9 +319,8 @@ fn tune_svr(
         scale,
         search,
         warm_start,
+        thin: thin.unwrap_or_else(|| tune::auto_thin(&splits)),
     };
-    let (xs, ys) = (samples(&x)?, slice1(&y)?);
-    let splits = from_pairs(splits);
     let r = crate::detach(py, || {
         tune::tune_svr(xs, ys, &splits, &tp, |gen, best| {
             if let Some(cb) = &progress {
@@ -340,6 +343,7 @@ fn tune_svr(
         r.history,
         r.n_evals,
         r.cost.fits,
+        r.thin,
         PySvrModel { inner: r.model },
     ))
 }
