@@ -9,14 +9,16 @@ pymetaheuristic is optional (``pip install ".[bench]"``); without it the row say
 
 ``python benches/bench_tune.py --shop`` runs the same budget at a real size (issue 12 point 4):
 the shipped shop run's training rows (``make_shop_case(1)``, first 60 % = 6 624 rows × 16
-temperature rises, target ``E_ch1``), 5 time-ordered folds, the seed's bounds C ∈ [0.1, 100],
-γ ∈ [1e-3, 1]. Ours twice: the plain search (``warm_start=False``: the same path, bit for bit, as
-fitting every fold of every point) and with warm starts. The references would take hours, so
-their time is extrapolated, and said to be: scikit-learn's 5-fold ``cross_val_score`` timed at
-``SAMPLE`` points drawn uniformly in the log box plus the search's optimum, times the search's
-2 020 evaluations (pymetaheuristic's ``chicken_so`` adds nothing measurable to that);
-``GridSearchCV(n_jobs=2)`` timed on a 3 × 3 grid of the box, per point, times 2 020. About
-25 minutes on 2 cores (2026-11-24: 747 s and 330 s for the two searches)."""
+temperature rises, target ``E_ch1``; ``--channel`` picks another), 5 time-ordered folds, the
+seed's bounds C ∈ [0.1, 100], γ ∈ [1e-3, 1]. Ours twice: the default search (``thin="auto"``:
+the swarm on every 6th row, its 16 best points scored on every row) and the plain search on every
+row (``thin=1``: the same path, bit for bit, as fitting every fold of every point), each with its
+CV MSE on every row and the test MAE (rows 60-80 %) of its refitted SVR. The references would
+take hours, so their time is extrapolated, and said to be: scikit-learn's 5-fold
+``cross_val_score`` timed at ``SAMPLE`` points drawn uniformly in the log box plus the search's
+optimum, times the search's 2 020 evaluations (pymetaheuristic's ``chicken_so`` adds nothing
+measurable to that); ``GridSearchCV(n_jobs=2)`` timed on a 3 × 3 grid of the box, per point,
+times 2 020. About 15 minutes on 2 cores (``--no-plain``: about 2 minutes)."""
 
 from __future__ import annotations
 
@@ -79,7 +81,7 @@ def rows(sizes=SIZES, repeat: int = 3) -> list[dict]:
 SAMPLE = 6
 
 
-def shop_rows() -> list[dict]:
+def shop_rows(channel: str = "E_ch1", plain: bool = True) -> list[dict]:
     """The seed-004 budget on the shop run's training rows (see the module docstring)."""
     import sys
     import time
@@ -91,25 +93,29 @@ def shop_rows() -> list[dict]:
     from shop_benchmark import FEATURES, shop_run, split
 
     run = shop_run()
-    rows, _ = split(len(run))
-    x = run.matrix(FEATURES)
-    x = (x - x[0])[rows]
-    y = run["E_ch1"][rows]
+    rows, test = split(len(run))
+    x_all = run.matrix(FEATURES)
+    x_all = x_all - x_all[0]
+    x, y = x_all[rows], run[channel][rows]
     bounds = {"C": (0.1, 100.0), "gamma": (1e-3, 1.0)}
     size = f"{x.shape[0]} x {x.shape[1]}, 5 time folds"
+    searches = [("default (thin auto)", "auto")] + ([("plain (thin 1)", 1)] if plain else [])
     out, res = [], {}
-    for warm in (False, True):
+    for label, thin in searches:
         t0 = time.perf_counter()
-        res[warm] = r = tr.tune_svr(x, y, bounds=bounds, pop=20, iters=100, seed=0, progress=False, warm_start=warm)
-        res[warm, "t"] = time.perf_counter() - t0
-        print(f"ours warm_start={warm}: {res[warm, 't']:.0f} s, C {r.C:.6g} gamma {r.gamma:.6g} CV MSE {r.cv_mse:.6g}, "
-              f"{r.n_fits} of {r.n_evals * 5} fold fits", flush=True)
+        r = tr.tune_svr(x, y, bounds=bounds, pop=20, iters=100, seed=0, progress=False, thin=thin)
+        t = time.perf_counter() - t0
+        mae = float(np.mean(np.abs(r.model.predict(x_all[test]) - run[channel][test])))
+        res[label] = (r, t, mae)
+        print(f"ours {label}: {t:.0f} s, thin {r.thin}, C {r.C:.6g} gamma {r.gamma:.6g} CV MSE {r.cv_mse:.6g}, "
+              f"test MAE {mae:.4f} um, {r.n_fits} fold fits", flush=True)
     from sklearn.model_selection import GridSearchCV, TimeSeriesSplit, cross_val_score
     from sklearn.svm import SVR
 
+    best = res[searches[0][0]][0]
     cv = TimeSeriesSplit(5)
     rng = np.random.default_rng(0)
-    pts = [(10 ** rng.uniform(-1, 2), 10 ** rng.uniform(-3, 0)) for _ in range(SAMPLE)] + [(res[False].C, res[False].gamma)]
+    pts = [(10 ** rng.uniform(-1, 2), 10 ** rng.uniform(-3, 0)) for _ in range(SAMPLE)] + [(best.C, best.gamma)]
     t0 = time.perf_counter()
     for c, g in pts:
         cross_val_score(SVR(C=c, gamma=g), x, y, cv=cv, scoring="neg_mean_squared_error")
@@ -118,10 +124,10 @@ def shop_rows() -> list[dict]:
     t0 = time.perf_counter()
     GridSearchCV(SVR(), grid, cv=cv, scoring="neg_mean_squared_error", n_jobs=2).fit(x, y)
     per_grid = (time.perf_counter() - t0) / 9
-    n = res[False].n_evals
-    for warm, label in ((False, "plain"), (True, "warm starts")):
-        r, t = res[warm], res[warm, "t"]
-        note = f"CV MSE {r.cv_mse:.6g}; {r.n_fits} of {n * 5} fold fits"
+    n = 20 * 101  # the seed's budget: the initial population and 100 generations
+    for label, _ in searches:
+        r, t, mae = res[label]
+        note = f"{channel}: CV MSE {r.cv_mse:.6g}, test MAE {mae:.4f} um; {r.n_fits} fold fits"
         out.append(dict(task=f"CSO-SVR search, {label} vs sklearn cross_val_score x {n} (extrapolated)", size=size,
                         ours_s=t, ref_s=per_eval * n, ratio=per_eval * n / t,
                         note=note + f"; sklearn {per_eval:.2f} s per 5-fold evaluation, mean of {len(pts)} points"))
@@ -135,8 +141,10 @@ if __name__ == "__main__":
     import argparse
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--shop", action="store_true", help="the seed-004 budget on the shop run (about 25 min)")
+    ap.add_argument("--shop", action="store_true", help="the seed-004 budget on the shop run (about 15 min)")
+    ap.add_argument("--channel", default="E_ch1", help="the shop run's probe channel of --shop (default E_ch1)")
+    ap.add_argument("--no-plain", action="store_true", help="--shop without the plain search (about 2 min)")
     args = ap.parse_args()
-    for row in (shop_rows() if args.shop else rows()):
+    for row in (shop_rows(args.channel, not args.no_plain) if args.shop else rows()):
         print(f"{row['task']:<70} {row['size']:<26} ours {row['ours_s']:8.2f} s  ref {row['ref_s']:9.2f} s  "
               f"x{row['ratio']:.1f}  {row['note']}")

@@ -162,9 +162,11 @@ def tune_svr(
     ``thin`` (an int ``k`` ≥ 1, or ``"auto"``): with ``k`` > 1 the swarm runs on every ``k``-th row
     (rows 0, k, 2k, …; each split keeps its rows among them) and each of its fits takes C·k, so
     that the loss summed over a k-th of the rows weighs as the whole sum; then the 16 best points
-    it fitted on every fold are scored on every row, cold, and the best of them is returned with
-    that CV MSE — the objective :func:`svr_cv_mse` gives at the returned point (``history`` holds
-    the thinned search's values). ``"auto"`` (the default) thins so that the largest training set
+    it fitted on every fold are scored on every row, cold, and a compass search on every row
+    starts from the best of them (at most 8 rounds of its 4 neighbours, a sixteenth of the box
+    first, the step halved when none is better). The point returned carries its CV MSE on every
+    row — the objective :func:`svr_cv_mse` gives there (``history`` holds the thinned search's
+    values). ``"auto"`` (the default) thins so that the largest training set
     has at most 1 000 rows, and not at all up to that; ``thin=1`` is the plain search on every
     row. Neighbouring rows of a run sampled every few seconds carry nearly the same information,
     so the thinned objective ranks (C, γ) much as the full one does, at a fraction of the cost

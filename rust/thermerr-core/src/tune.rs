@@ -54,7 +54,8 @@ pub struct TuneParams {
     /// runs on rows 0, k, 2k, … of the data, each split keeping its rows among them, and every
     /// fit there takes C·k (the ε-insensitive loss summed over a k-th of the rows, weighted as
     /// the whole sum); then the [`REFINE`] best points it fitted on every fold are scored on
-    /// every row and the best of them is the result. [`auto_thin`] chooses k from the splits.
+    /// every row, and a compass search on every row ([`POLISH_ROUNDS`] rounds) starts from the
+    /// best of them. [`auto_thin`] chooses k from the splits.
     pub thin: usize,
 }
 
@@ -65,6 +66,10 @@ pub const THIN_ROWS: usize = 1000;
 /// Points a thinned search scores on every row: its best, by the thinned objective, of those it
 /// fitted on every fold.
 pub const REFINE: usize = 16;
+
+/// Rounds of the compass search on every row that ends a thinned search (four points a round at
+/// most).
+pub const POLISH_ROUNDS: usize = 8;
 
 /// How far (Euclidean, in decades of C and γ) a fitted point may be from a new one to start its
 /// solver from.
@@ -762,15 +767,19 @@ fn search_with(
         let means = fine.cold_means(&pts);
         crate::interrupt::check()?;
         let best = (0..pts.len()).min_by(|&a, &b| means[a].total_cmp(&means[b]));
-        let (c, gamma, cv_mse) = match best {
-            Some(i) => (pts[i].0, pts[i].1, means[i]),
-            None => (f64::NAN, f64::NAN, f64::INFINITY),
+        let (start, polished) = match best {
+            Some(i) if means[i].is_finite() => {
+                polish(&fine, params, &bounds, (pts[i].0, pts[i].1, means[i]))?
+            }
+            _ => ((f64::NAN, f64::NAN, f64::INFINITY), 0),
         };
+        let (c, gamma, cv_mse) = start;
+        let scored = pts.len() + polished;
         let cost = SearchCost {
-            fits: stage1.fits + pts.len() * nf,
-            full: stage1.full + pts.len() * nf,
+            fits: stage1.fits + scored * nf,
+            full: stage1.full + scored * nf,
         };
-        (c, gamma, cv_mse, res.history, res.n_evals + pts.len(), cost)
+        (c, gamma, cv_mse, res.history, res.n_evals + scored, cost)
     };
     crate::interrupt::check()?;
     if !cv_mse.is_finite() {
@@ -789,6 +798,53 @@ fn search_with(
         model,
         thin: k,
     })
+}
+
+/// A compass search on every row from the best point `(C, γ, CV MSE)` of a thinned search:
+/// each round scores the four neighbours one step along each coordinate of the search box (a
+/// sixteenth of its width at first), moves to the best if it is better, else halves the step;
+/// [`POLISH_ROUNDS`] rounds at most. Returns the best point and how many points it scored.
+fn polish(
+    fine: &FoldedObjective<'_>,
+    params: &TuneParams,
+    bounds: &Bounds,
+    start: (f64, f64, f64),
+) -> Result<((f64, f64, f64), usize)> {
+    let (lo, hi) = (&bounds.lower, &bounds.upper);
+    let mut at = match params.scale {
+        Scale::Log => [start.0.log10(), start.1.log10()],
+        Scale::Linear => [start.0, start.1],
+    };
+    let (mut best, mut step, mut scored) = (start, 1.0 / 16.0, 0);
+    for _ in 0..POLISH_ROUNDS {
+        let mut trial: Vec<([f64; 2], (f64, f64))> = Vec::new();
+        for d in 0..2 {
+            for sign in [-1.0, 1.0] {
+                let mut p = at;
+                p[d] = (p[d] + sign * step * (hi[d] - lo[d])).clamp(lo[d], hi[d]);
+                let cg = params.decode(&p);
+                // a neighbour clipped back onto the point (at the box's edge) is not scored
+                if cg != (best.0, best.1) && trial.iter().all(|t| t.1 != cg) {
+                    trial.push((p, cg));
+                }
+            }
+        }
+        if trial.is_empty() {
+            break;
+        }
+        let pts: Vec<(f64, f64)> = trial.iter().map(|t| t.1).collect();
+        let means = fine.cold_means(&pts);
+        crate::interrupt::check()?;
+        scored += pts.len();
+        match (0..pts.len()).min_by(|&a, &b| means[a].total_cmp(&means[b])) {
+            Some(i) if means[i] < best.2 => {
+                best = (pts[i].0, pts[i].1, means[i]);
+                at = trial[i].0;
+            }
+            _ => step /= 2.0,
+        }
+    }
+    Ok((best, scored))
 }
 
 /// The swarm of `params` over `bounds` on `objective`; `progress(generation, best_so_far)` after
