@@ -342,7 +342,7 @@ fn thinned(
             return Err(Error::param(
                 "thin",
                 format!(
-                    "every {k}th row leaves fold {j} without a {} row; use a smaller thin",
+                    "one row in {k} leaves fold {j} without a {} row; use a smaller thin",
                     if s.train.is_empty() {
                         "training"
                     } else {
