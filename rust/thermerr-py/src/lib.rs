@@ -36,8 +36,9 @@ pub(crate) fn detach<T: Send>(
     detach_ticking(py, f, |_| {})
 }
 
-/// [`detach`], calling `tick` with the GIL held at every poll (every 50 ms) while the call runs:
-/// the place to draw a progress bar from the call's [`thermerr_core::progress::Progress`].
+/// [`detach`], calling `tick` with the GIL held at every poll (every 50 ms) while the call runs,
+/// and once more when it has ended: the place to draw a progress bar from the call's
+/// [`thermerr_core::progress::Progress`].
 pub(crate) fn detach_ticking<T: Send>(
     py: Python<'_>,
     f: impl FnOnce() -> thermerr_core::Result<T> + Send,
@@ -64,12 +65,21 @@ pub(crate) fn detach_ticking<T: Send>(
                     }
                 }
             }
+            // the last counts too: a call that ends between two polls (or before the first, on
+            // a small run) still shows where it ended
+            if signal.is_none() {
+                Python::attach(|py| tick(py));
+            }
             (worker.join(), signal)
         })
     });
-    // an interrupt raised here or by a callback (a progress bar's KeyboardInterrupt) is spent
-    // once the call has stopped: the next call starts clean
-    if signal.is_some() || matches!(joined, Ok(Err(thermerr_core::Error::Interrupted))) {
+    // an interrupt raised here or by a callback (a progress bar's KeyboardInterrupt, also in
+    // that last tick, after the work) is spent once the call has stopped: the next call starts
+    // clean
+    if signal.is_some()
+        || thermerr_core::interrupt::requested()
+        || matches!(joined, Ok(Err(thermerr_core::Error::Interrupted)))
+    {
         thermerr_core::interrupt::clear();
     }
     let result = match joined {
