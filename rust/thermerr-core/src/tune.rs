@@ -1026,13 +1026,9 @@ mod tests {
         (x, y)
     }
 
-    #[test]
-    fn tuning_finds_a_better_cv_error_than_the_corners_and_is_deterministic() {
-        let n = 45;
-        let (x, y) = curve(n);
-        let s = Samples::new(&x, n, 3).unwrap();
-        let folds = kfold_splits(n, 5, Some(1)).unwrap();
-        let tp = TuneParams {
+    /// A CSO search (pop 10 × 15) of C ∈ [0.01, 100], γ ∈ [1e-3, 10] on log scales.
+    fn cso_in_box(seed: u64, warm_start: Option<bool>, thin: usize) -> TuneParams {
+        TuneParams {
             svr: SvrParams::default(),
             c_bounds: (0.01, 100.0),
             gamma_bounds: (1e-3, 10.0),
@@ -1040,19 +1036,39 @@ mod tests {
             search: Search::Cso(CsoParams {
                 pop: 10,
                 iters: 15,
-                seed: 7,
+                seed,
                 ..Default::default()
             }),
-            warm_start: Some(true),
-            thin: 1,
-        };
+            warm_start,
+            thin,
+        }
+    }
+
+    /// The search's CV error is below that of each corner of [`cso_in_box`]'s box.
+    fn beats_the_corners(
+        r: &TuneResult,
+        s: Samples<'_>,
+        y: &[f64],
+        splits: &[Split],
+        tp: &TuneParams,
+    ) {
+        for (c, g) in [(0.01, 1e-3), (100.0, 10.0), (0.01, 10.0), (100.0, 1e-3)] {
+            let corner = cv_mse(s, y, splits, &tp.svr_at(c, g)).unwrap();
+            assert!(r.cv_mse < corner, "{} vs corner {corner}", r.cv_mse);
+        }
+    }
+
+    #[test]
+    fn tuning_finds_a_better_cv_error_than_the_corners_and_is_deterministic() {
+        let n = 45;
+        let (x, y) = curve(n);
+        let s = Samples::new(&x, n, 3).unwrap();
+        let folds = kfold_splits(n, 5, Some(1)).unwrap();
+        let tp = cso_in_box(7, Some(true), 1);
         let mut calls = 0;
         let r = tune_svr(s, &y, &folds, &tp, |_, _| calls += 1).unwrap();
         assert_eq!(calls, 16); // the initial population, then 15 generations
-        for (c, g) in [(0.01, 1e-3), (100.0, 10.0), (0.01, 10.0), (100.0, 1e-3)] {
-            let corner = cv_mse(s, &y, &folds, &tp.svr_at(c, g)).unwrap();
-            assert!(r.cv_mse < corner, "{} vs corner {corner}", r.cv_mse);
-        }
+        beats_the_corners(&r, s, &y, &folds, &tp);
         let again = tune_svr(s, &y, &folds, &tp, |_, _| {}).unwrap();
         assert_eq!(
             (r.c, r.gamma, r.cv_mse),
@@ -1193,20 +1209,7 @@ mod tests {
         let (x, y) = curve(n);
         let s = Samples::new(&x, n, 3).unwrap();
         let splits = time_series_split(n, 4, 0, None, None).unwrap();
-        let tp = |thin: usize| TuneParams {
-            svr: SvrParams::default(),
-            c_bounds: (0.01, 100.0),
-            gamma_bounds: (1e-3, 10.0),
-            scale: Scale::Log,
-            search: Search::Cso(CsoParams {
-                pop: 10,
-                iters: 15,
-                seed: 5,
-                ..Default::default()
-            }),
-            warm_start: None,
-            thin,
-        };
+        let tp = |thin: usize| cso_in_box(5, None, thin);
         let r = tune_svr(s, &y, &splits, &tp(4), |_, _| {}).unwrap();
         assert_eq!(r.thin, 4);
         let direct = cv_mse(s, &y, &splits, &tp(4).svr_at(r.c, r.gamma)).unwrap();
@@ -1220,9 +1223,6 @@ mod tests {
                 again.cv_mse.to_bits()
             )
         );
-        for (c, g) in [(0.01, 1e-3), (100.0, 10.0), (0.01, 10.0), (100.0, 1e-3)] {
-            let corner = cv_mse(s, &y, &splits, &tp(1).svr_at(c, g)).unwrap();
-            assert!(r.cv_mse < corner, "{} vs corner {corner}", r.cv_mse);
-        }
+        beats_the_corners(&r, s, &y, &splits, &tp(1));
     }
 }
