@@ -68,7 +68,7 @@ pub(crate) fn detach_ticking<T: Send>(
             // the last counts too: a call that ends between two polls (or before the first, on
             // a small run) still shows where it ended
             if signal.is_none() {
-                Python::attach(|py| tick(py));
+                Python::attach(&mut tick);
             }
             (worker.join(), signal)
         })
