@@ -83,11 +83,11 @@ def test_a_swarm_tuned_svr_is_one_more_candidate_searched_on_the_same_splits(exa
     assert len(sel.leaderboard) == 9 + 1
     tuned = next(e for e in sel.leaderboard if e.candidate.tune)
     assert tuned.candidate.tune == ("cso", 6, 3) and "tuned=cso 6x3" in tuned.candidate.label()
-    # its C and gamma are tune_svr's on the same time-ordered splits of the same inputs
+    # its C and gamma are tune_svr's, in its default box, on the same time-ordered splits of the
+    # same inputs
     x, y = run.input_matrix(SENSORS, "rise"), run["E_z"]
     splits = tr.time_series_split(len(run), 3)
-    res = tr.tune_svr(x, y, cv=splits, bounds={"C": (0.1, 100.0), "gamma": (1e-3, 1.0)}, pop=6, iters=3, seed=2,
-                      progress=False)
+    res = tr.tune_svr(x, y, cv=splits, pop=6, iters=3, seed=2, progress=False)
     assert (tuned.candidate.params["C"], tuned.candidate.params["gamma"]) == (res.C, res.gamma)
     # and it is scored like every other candidate: the mean RMS over the splits
     by_hand = [np.sqrt(np.mean((y[te] - tr.SVR(C=res.C, gamma=res.gamma).fit(x[tr_], y[tr_]).predict(x[te])) ** 2))

@@ -36,9 +36,6 @@ from .run import Run
 #: per-sample predictions timed for a candidate's edge latency (cycling through its test rows)
 EDGE_SAMPLES = 1000
 
-#: the box of ``select_model(..., tune=...)``'s SVR search (seed 004's)
-TUNE_BOUNDS = {"C": (0.1, 100.0), "gamma": (1e-3, 1.0)}
-
 #: families :func:`select_model` knows, in the order they are tried
 FAMILIES: tuple[str, ...] = ("mlr", "rbf", "svr")
 
@@ -174,8 +171,8 @@ def select_model(run: Run, axis: str, features: Sequence[str], *, families: Sequ
     only), rank them by mean held-out RMS, refit the best on the whole run and return both.
 
     ``tune`` (``"cso"`` or ``"pso"``) adds, per history setting, an SVR whose C and γ
-    :func:`~thermerr_rs.tune_svr` searches (``tune_pop`` × ``tune_iters``, the seed's bounds
-    C ∈ [0.1, 100], γ ∈ [1e-3, 1], the search's seed ``seed``) by the mean MSE over the same
+    :func:`~thermerr_rs.tune_svr` searches (``tune_pop`` × ``tune_iters``, in its default box
+    C ∈ [0.01, 1000], γ ∈ [1e-4, 10], the search's seed ``seed``) by the mean MSE over the same
     splits, then scored like every other candidate. Its CV RMS, like the grid's, is measured on
     the splits it was chosen on; a search tries more points than the grid, so it is the more
     optimistic of the two (only a held-out run says by how much)."""
@@ -205,7 +202,7 @@ def select_model(run: Run, axis: str, features: Sequence[str], *, families: Sequ
             from .swarm import tune_svr
 
             method, pop, iters = c.tune
-            res = tune_svr(x, y, method=method, cv=splits, bounds=TUNE_BOUNDS, pop=pop, iters=iters, seed=seed,
+            res = tune_svr(x, y, method=method, cv=splits, pop=pop, iters=iters, seed=seed,
                            progress=False)
             c = Candidate("svr", {"C": res.C, "gamma": res.gamma, "epsilon": 0.1}, c.history, tune=c.tune)
         rms, fit_s, pred_us = [], [], []
