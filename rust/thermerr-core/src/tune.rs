@@ -666,6 +666,14 @@ impl TuneParams {
             .kernel(KernelKind::Rbf)
     }
 
+    /// A point (C, γ) as the swarm's position (log10 of both on the log scale).
+    fn encode(&self, c: f64, gamma: f64) -> Vec<f64> {
+        match self.scale {
+            Scale::Linear => vec![c, gamma],
+            Scale::Log => vec![c.log10(), gamma.log10()],
+        }
+    }
+
     /// Whether the search starts fold solvers warm: as asked, else only in a thinned search.
     pub fn warm(&self) -> bool {
         self.warm_start.unwrap_or(self.thin > 1)
@@ -731,7 +739,6 @@ fn search_with(
         return Err(Error::param("thin", "must be at least 1 (1: every row)"));
     }
     let parts = split(x, y, splits);
-    let nf = splits.len();
     let (c, gamma, cv_mse, history, n_evals, cost) = if k == 1 {
         let mut objective = FoldedObjective::new(x, &parts, splits, params, 1.0, max_shared_bytes);
         let res = run_swarm(&mut objective, &bounds, params, &mut progress)?;
@@ -752,32 +759,47 @@ fn search_with(
         let mut coarse =
             FoldedObjective::new(ts, &tparts, &tsplits, params, k as f64, max_shared_bytes);
         let res = run_swarm(&mut coarse, &bounds, params, &mut progress)?;
-        let pts: Vec<(f64, f64)> = coarse
+        let pts: Vec<Vec<f64>> = coarse
             .complete()
             .into_iter()
             .filter(|p| p.2.is_finite())
             .take(REFINE)
-            .map(|p| (p.0, p.1))
+            .map(|p| params.encode(p.0, p.1))
             .collect();
         let stage1 = coarse.cost;
         drop(coarse);
-        // second stage: those points on every row, cold; the first best in the first stage's
-        // order
-        let fine = FoldedObjective::new(x, &parts, splits, params, 1.0, max_shared_bytes);
-        let means = fine.cold_means(&pts);
-        crate::interrupt::check()?;
-        let best = (0..pts.len()).min_by(|&a, &b| means[a].total_cmp(&means[b]));
-        let (start, polished) = match best {
-            Some(i) if means[i].is_finite() => {
-                polish(&fine, params, &bounds, (pts[i].0, pts[i].1, means[i]))?
-            }
-            _ => ((f64::NAN, f64::NAN, f64::INFINITY), 0),
+        // second stage, on every row and cold: those points a few at a time, each batch against
+        // the best so far (a point whose first folds already exceed it stops: it cannot win),
+        // then a compass search from the best
+        let cold = TuneParams {
+            warm_start: Some(false),
+            ..params.clone()
         };
-        let (c, gamma, cv_mse) = start;
-        let scored = pts.len() + polished;
+        let mut fine = FoldedObjective::new(x, &parts, splits, &cold, 1.0, max_shared_bytes);
+        let mut best = (Vec::new(), f64::INFINITY);
+        for batch in pts.chunks(2 * rayon::current_num_threads().max(1)) {
+            let out = fine.eval(batch, &vec![best.1; batch.len()])?;
+            for (p, v) in batch.iter().zip(out) {
+                if v < best.1 {
+                    best = (p.clone(), v);
+                }
+            }
+        }
+        let mut scored = pts.len();
+        if best.1.is_finite() {
+            let (polished, n) = polish(&mut fine, &bounds, best)?;
+            best = polished;
+            scored += n;
+        }
+        let (c, gamma) = if best.1.is_finite() {
+            cold.decode(&best.0)
+        } else {
+            (f64::NAN, f64::NAN)
+        };
+        let cv_mse = best.1;
         let cost = SearchCost {
-            fits: stage1.fits + scored * nf,
-            full: stage1.full + scored * nf,
+            fits: stage1.fits + fine.cost.fits,
+            full: stage1.full + fine.cost.full,
         };
         (c, gamma, cv_mse, res.history, res.n_evals + scored, cost)
     };
@@ -800,47 +822,37 @@ fn search_with(
     })
 }
 
-/// A compass search on every row from the best point `(C, γ, CV MSE)` of a thinned search:
+/// A compass search on every row from the best point (position, CV MSE) of a thinned search:
 /// each round scores the four neighbours one step along each coordinate of the search box (a
-/// sixteenth of its width at first), moves to the best if it is better, else halves the step;
+/// sixteenth of its width at first) against the best so far (a neighbour whose first folds
+/// already exceed it stops), moves to the best if it is better, else halves the step;
 /// [`POLISH_ROUNDS`] rounds at most. Returns the best point and how many points it scored.
 fn polish(
-    fine: &FoldedObjective<'_>,
-    params: &TuneParams,
+    fine: &mut FoldedObjective<'_>,
     bounds: &Bounds,
-    start: (f64, f64, f64),
-) -> Result<((f64, f64, f64), usize)> {
+    start: (Vec<f64>, f64),
+) -> Result<((Vec<f64>, f64), usize)> {
     let (lo, hi) = (&bounds.lower, &bounds.upper);
-    let mut at = match params.scale {
-        Scale::Log => [start.0.log10(), start.1.log10()],
-        Scale::Linear => [start.0, start.1],
-    };
     let (mut best, mut step, mut scored) = (start, 1.0 / 16.0, 0);
     for _ in 0..POLISH_ROUNDS {
-        let mut trial: Vec<([f64; 2], (f64, f64))> = Vec::new();
-        for d in 0..2 {
+        let mut trial: Vec<Vec<f64>> = Vec::new();
+        for d in 0..best.0.len() {
             for sign in [-1.0, 1.0] {
-                let mut p = at;
+                let mut p = best.0.clone();
                 p[d] = (p[d] + sign * step * (hi[d] - lo[d])).clamp(lo[d], hi[d]);
-                let cg = params.decode(&p);
                 // a neighbour clipped back onto the point (at the box's edge) is not scored
-                if cg != (best.0, best.1) && trial.iter().all(|t| t.1 != cg) {
-                    trial.push((p, cg));
+                if p != best.0 && !trial.contains(&p) {
+                    trial.push(p);
                 }
             }
         }
         if trial.is_empty() {
             break;
         }
-        let pts: Vec<(f64, f64)> = trial.iter().map(|t| t.1).collect();
-        let means = fine.cold_means(&pts);
-        crate::interrupt::check()?;
-        scored += pts.len();
-        match (0..pts.len()).min_by(|&a, &b| means[a].total_cmp(&means[b])) {
-            Some(i) if means[i] < best.2 => {
-                best = (pts[i].0, pts[i].1, means[i]);
-                at = trial[i].0;
-            }
+        let out = fine.eval(&trial, &vec![best.1; trial.len()])?;
+        scored += trial.len();
+        match (0..trial.len()).min_by(|&a, &b| out[a].total_cmp(&out[b])) {
+            Some(i) if out[i] < best.1 => best = (trial[i].clone(), out[i]),
             _ => step /= 2.0,
         }
     }
