@@ -205,3 +205,14 @@ def test_bad_thinning_is_one_parameter_error() -> None:
     # 60 rows in 5 time-ordered splits: every 50th row is row 0 or 50, no test row in fold 0
     with pytest.raises(ParameterError, match="fold 0 without a test row"):
         tr.tune_svr(x, y, thin=50, progress=False)
+
+
+def test_the_bar_says_when_a_thinned_search_scores_on_every_row(capsys) -> None:
+    x, y = run_like()
+    tr.tune_svr(x, y, cv=4, pop=4, iters=2, seed=3, progress=True)
+    err = capsys.readouterr().err
+    assert "CSO-SVR on 1 row in 2" in err and "3/3" in err
+    assert "then=scoring the best on every row" in err
+    tr.tune_svr(x[:600], y[:600], pop=4, iters=2, seed=3, progress=True)
+    err = capsys.readouterr().err
+    assert "CSO-SVR: " in err and "every row" not in err

@@ -198,16 +198,20 @@ def tune_svr(
         k_thin = int(thin)
         if k_thin < 1:
             raise ParameterError(f"invalid parameter `thin`: must be \"auto\" or an int >= 1, got {thin!r}")
+    every = int(_core.auto_thin(folds)) if k_thin is None else k_thin
     show = sys.stderr.isatty() if progress is None else progress
     bar: Any = None
     cb = None
     if show:
         from tqdm import tqdm
 
-        bar = tqdm(total=iters + 1, desc=f"{method.upper()}-SVR", unit="gen")
+        desc = f"{method.upper()}-SVR" + (f" on 1 row in {every}" if every > 1 else "")
+        bar = tqdm(total=iters + 1, desc=desc, unit="gen")
 
         def cb(gen: int, best: float) -> None:
-            bar.set_postfix(cv_mse=f"{best:.4g}", refresh=False)
+            # after a thinned search's last generation its best points are scored on every row
+            then = {"then": "scoring the best on every row"} if every > 1 and gen == iters else {}
+            bar.set_postfix(cv_mse=f"{best:.4g}", **then, refresh=False)
             bar.update(1)
 
     try:
@@ -215,7 +219,7 @@ def tune_svr(
             x, yv, folds, method=method, c_bounds=(float(b["C"][0]), float(b["C"][1])),
             gamma_bounds=(float(b["gamma"][0]), float(b["gamma"][1])), scale=scale, epsilon=float(epsilon),
             tol=float(tol), pop=int(pop), iters=int(iters), seed=int(seed), warm_start=None if warm_start is None else bool(warm_start),
-            thin=k_thin, progress=cb, **extra,
+            thin=every, progress=cb, **extra,
         )
     finally:
         if bar is not None:

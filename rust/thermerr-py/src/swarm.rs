@@ -235,6 +235,12 @@ fn check_splits(splits: Pairs, n: usize) -> PyResult<()> {
     Ok(tune::check_splits(&from_pairs(splits), n).map_err(PyErrWrap)?)
 }
 
+/// The thinning `tune_svr(thin="auto")` takes for these splits (the core's rule).
+#[pyfunction]
+fn auto_thin(splits: Pairs) -> usize {
+    tune::auto_thin(&from_pairs(splits))
+}
+
 /// Mean held-out MSE of an SVR (C, gamma) over the given (train, test) splits.
 #[pyfunction]
 #[pyo3(signature = (x, y, splits, *, c, gamma, epsilon = 0.1, tol = 1e-3))]
@@ -354,6 +360,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(kfold_splits, m)?)?;
     m.add_function(wrap_pyfunction!(time_series_split, m)?)?;
     m.add_function(wrap_pyfunction!(check_splits, m)?)?;
+    m.add_function(wrap_pyfunction!(auto_thin, m)?)?;
     m.add_function(wrap_pyfunction!(svr_cv_mse, m)?)?;
     m.add_function(wrap_pyfunction!(tune_svr, m)?)?;
     Ok(())
