@@ -299,16 +299,18 @@ pub fn auto_thin(splits: &[Split]) -> usize {
     while k > 1
         && !splits
             .iter()
-            .all(|s| kept(&s.train, k) >= 2 && kept(&s.test, k) >= 1)
+            .all(|s| on_stride(&s.train, k).count() >= 2 && on_stride(&s.test, k).count() >= 1)
     {
         k -= 1;
     }
     k
 }
 
-/// How many of `idx` are on the stride k (rows 0, k, 2k, …).
-fn kept(idx: &[usize], k: usize) -> usize {
-    idx.iter().filter(|&&i| i % k == 0).count()
+/// The indices of `idx` on the stride k (rows 0, k, 2k, …), renumbered along it, in their order.
+fn on_stride(idx: &[usize], k: usize) -> impl Iterator<Item = usize> + '_ {
+    idx.iter()
+        .filter(move |&&i| i % k == 0)
+        .map(move |&i| i / k)
 }
 
 /// The data and splits of a search on every k-th row: rows 0, k, 2k, … of `x`, `y`, and each
@@ -324,17 +326,11 @@ fn thinned(
     let mut xs = Vec::with_capacity(rows.len() * x.ncols());
     rows.iter().for_each(|&i| xs.extend_from_slice(x.row(i)));
     let ys = rows.iter().map(|&i| y[i]).collect();
-    let on = |idx: &[usize]| -> Vec<usize> {
-        idx.iter()
-            .filter(|&&i| i % k == 0)
-            .map(|&i| i / k)
-            .collect()
-    };
     let out: Vec<Split> = splits
         .iter()
         .map(|s| Split {
-            train: on(&s.train),
-            test: on(&s.test),
+            train: on_stride(&s.train, k).collect(),
+            test: on_stride(&s.test, k).collect(),
         })
         .collect();
     for (j, s) in out.iter().enumerate() {
@@ -504,18 +500,14 @@ impl<'a> FoldedObjective<'a> {
         (mse_of(pred, &f.y_test), solved)
     }
 
-    /// The mean over the folds at each point (c, γ) with every solver started cold: the
-    /// objective as [`cv_mse`] computes it (the same bits); every (point, fold) in parallel.
-    fn cold_means(&self, pts: &[(f64, f64)]) -> Vec<f64> {
-        let nf = self.parts.len();
-        let per: Vec<f64> = (0..pts.len() * nf)
+    /// The mean over the folds at (c, γ) with every solver started cold: the objective as
+    /// [`cv_mse`] computes it (the same bits), for the point a warm-started search returns.
+    fn cold_mean(&self, c: f64, gamma: f64) -> f64 {
+        let per: Vec<f64> = (0..self.parts.len())
             .into_par_iter()
-            .map(|t| {
-                let (c, g) = pts[t / nf];
-                self.fold(t % nf, c, g, false).0
-            })
+            .map(|j| self.fold(j, c, gamma, false).0)
             .collect();
-        per.chunks(nf.max(1)).map(fold_mean).collect()
+        fold_mean(&per)
     }
 
     /// The points fitted on every fold, by their mean, best first: `(C, γ, mean)`.
@@ -746,7 +738,7 @@ fn search_with(
         // a warm-started solution differs from a cold one in the last digits: report the
         // objective at the point as anyone recomputing it gets it
         let cv_mse = if params.warm() && res.f.is_finite() {
-            objective.cold_means(&[(c, gamma)])[0]
+            objective.cold_mean(c, gamma)
         } else {
             res.f
         };
