@@ -15,6 +15,40 @@ from .errors import DataError, MissingColumnError, ParameterError
 NanPolicy = Literal["error", "drop", "interpolate"]
 
 
+def _date_times(col: Any, source: str) -> F64:
+    """A frame's ``time`` column in seconds since the epoch: ``datetime64`` values (UTC for
+    time-zone aware ones) converted here, strings read by the core's ISO-8601 reader (as a CSV's
+    ``time`` cells are)."""
+    dt = getattr(col, "dt", None)
+    if getattr(dt, "tz", None) is not None:  # pandas, time-zone aware: the instants in UTC
+        col = dt.tz_convert("UTC").dt.tz_localize(None)
+    if getattr(getattr(col, "dtype", None), "tz", None) is not None:  # a time-zone aware index
+        col = col.tz_convert("UTC").tz_localize(None)
+    arr = np.asarray(col.to_numpy() if hasattr(col, "to_numpy") else col)
+    if arr.dtype.kind == "M":
+        ns = arr.astype("datetime64[ns]")
+        out = ns.astype(np.int64).astype(np.float64) / 1e9
+        out[np.isnat(ns)] = np.nan
+        return out
+    if arr.dtype.kind in "iufb":
+        raise DataError(
+            f"{source}: column `time`: holds numbers; `time` is for date-times "
+            "(a number of seconds belongs in a `time_s` column)"
+        )
+    cells = [None if v is None or (isinstance(v, float) and np.isnan(v)) else str(v) for v in arr.tolist()]
+    return _core.iso_seconds(source, cells)
+
+
+def _not_a_number(source: str, name: str, col: Any) -> str:
+    """The refusal of a data column holding text, naming its first such cell as the CSV reader does."""
+    for i, v in enumerate(np.asarray(col, dtype=object).tolist()):
+        try:
+            float(v)
+        except (TypeError, ValueError):
+            return f"{source}, row {i + 1}, column `{name}`: \"{v}\" is not a number"
+    return f"{source}: column `{name}` is not numeric"
+
+
 class Run:
     """A validated measured run. Columns are float64 numpy arrays, by name: ``run["T_spindle"]``.
 
@@ -40,17 +74,35 @@ class Run:
 
     @classmethod
     def from_frame(cls, df: Any, *, nan: NanPolicy = "error", source: str = "<DataFrame>") -> Run:
-        """Build a run from a pandas or polars DataFrame (or any mapping of column → values)."""
+        """Build a run from a pandas or polars DataFrame (or any mapping of column → values).
+
+        The clock is a ``time_s`` column (seconds), else a ``time`` column of date-times
+        (``datetime64``, time-zone aware or not, or ISO-8601 strings read as :func:`read_run`
+        reads them), else a pandas ``DatetimeIndex``; a run's ``time_s`` then counts seconds
+        from its first row."""
         names = [str(c) for c in df.columns] if hasattr(df, "columns") else [str(k) for k in df]
+        index = getattr(df, "index", None)
+        from_index = (
+            "time_s" not in names and "time" not in names and getattr(getattr(index, "dtype", None), "kind", "") == "M"
+        )
+        if from_index:
+            names = ["time", *names]
         cols = []
         for name in names:
-            col = df[name]
+            col = index if from_index and name == "time" else df[name]
+            if name == "time" and "time_s" not in names:
+                cols.append(_date_times(col, source))
+                continue
             if hasattr(col, "to_numpy"):
                 col = col.to_numpy()
             try:
                 cols.append(np.asarray(col, dtype=np.float64))
             except (TypeError, ValueError):
-                raise DataError(f"{source}: column `{name}` is not numeric") from None
+                if name == "time_s" or _core.is_data_column(name):
+                    raise DataError(_not_a_number(source, name, col)) from None
+                # a text column the core ignores (a note, an operator's name): ignored with a
+                # warning, as in a CSV
+                cols.append(np.full(len(col), np.nan))
         if not cols:
             raise DataError(f"{source}: no columns")
         data = np.ascontiguousarray(np.column_stack(cols), dtype=np.float64)

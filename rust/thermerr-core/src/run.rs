@@ -5,6 +5,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::timeaxis::{time_column, IsoClock, TimeKind, TIME_ISO, TIME_S};
 
 /// What to do with missing values (empty cells or `NaN`) in data columns.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -124,10 +125,17 @@ impl Run {
                 });
             }
         }
+        let time = time_column(&names);
         let parsed: Vec<bool> = names
             .iter()
-            .map(|s| s == "time_s" || is_data_column(s))
+            .enumerate()
+            .map(|(j, s)| time.is_some_and(|(k, _)| k == j) || is_data_column(s))
             .collect();
+        // a `time` column of ISO-8601 date-times (when there is no `time_s`): its cells in seconds
+        let mut clock = match time {
+            Some((k, TimeKind::Iso)) => Some((k, IsoClock::new())),
+            _ => None,
+        };
         let mut cells: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
         let mut lines: Vec<u64> = Vec::new();
         let mut record = csv::StringRecord::new();
@@ -143,6 +151,17 @@ impl Run {
             for (j, cell) in record.iter().enumerate() {
                 if !parsed[j] {
                     cells[j].push(f64::NAN);
+                    continue;
+                }
+                if let Some((_, c)) = clock.as_mut().filter(|(k, _)| *k == j) {
+                    let v = c.seconds(cell).map_err(|reason| Error::Parse {
+                        file: file.clone(),
+                        line: Some(line),
+                        row: Some(row),
+                        column: Some(names[j].clone()),
+                        reason,
+                    })?;
+                    cells[j].push(v);
                     continue;
                 }
                 let v = parse_cell(cell).ok_or_else(|| Error::Parse {
@@ -198,37 +217,42 @@ impl Run {
         if columns.iter().any(|c| c.len() != n) {
             return Err(Error::Shape("columns of unequal length".into()));
         }
-        let Some(t_idx) = names.iter().position(|s| s == "time_s") else {
+        let Some((t_idx, kind)) = time_column(&names) else {
             return Err(whole(format!(
-                "no `time_s` column (columns are: {})",
+                "no `{TIME_S}` column (seconds) or `{TIME_ISO}` column (ISO-8601 date-times) \
+                 (columns are: {})",
                 names.join(", ")
             )));
         };
+        let t_name = kind.name();
         if n == 0 {
             return Err(whole("no data rows".into()));
         }
         let time = &columns[t_idx];
         for (i, t) in time.iter().enumerate() {
             if !t.is_finite() {
-                return Err(at(i, "time_s", "time is missing".into()));
+                return Err(at(i, t_name, "time is missing".into()));
             }
             if i > 0 && *t <= time[i - 1] {
-                return Err(at(
-                    i,
-                    "time_s",
-                    format!(
+                let reason = match kind {
+                    TimeKind::Seconds => format!(
                         "time is not strictly increasing ({} after {})",
                         t,
                         time[i - 1]
                     ),
-                ));
+                    TimeKind::Iso => format!(
+                        "time is not strictly increasing ({} s after the row before)",
+                        t - time[i - 1]
+                    ),
+                };
+                return Err(at(i, t_name, reason));
             }
         }
         let mut keep_names = Vec::new();
         let mut keep_cols = Vec::new();
         let mut ignored = Vec::new();
-        for (name, col) in names.iter().zip(&columns) {
-            if name == "time_s" {
+        for (k, (name, col)) in names.iter().zip(&columns).enumerate() {
+            if k == t_idx {
                 continue;
             }
             if is_data_column(name) {
@@ -238,7 +262,7 @@ impl Run {
                 ignored.push(name.clone());
             }
         }
-        for (name, col) in std::iter::once(("time_s", time))
+        for (name, col) in std::iter::once((t_name, time))
             .chain(keep_names.iter().map(String::as_str).zip(keep_cols.iter()))
         {
             if let Some(i) = col.iter().position(|v| v.abs() > MAX_ABS_VALUE) {
@@ -254,6 +278,11 @@ impl Run {
             }
         }
         let mut time = time.clone();
+        if kind == TimeKind::Iso {
+            // date-times are read as seconds since the epoch: the run's clock starts at its first row
+            let t0 = time[0];
+            time.iter_mut().for_each(|t| *t -= t0);
+        }
         let mut dropped_rows = Vec::new();
         let mut interpolated = 0;
         match nan {
@@ -264,7 +293,7 @@ impl Run {
                             return Err(at(
                                 i,
                                 name,
-                                "missing value (use nan=\"drop\" or \"interpolate\" to accept gaps)"
+                                "missing value (to accept gaps: nan=\"drop\" or \"interpolate\"; --nan on the command line)"
                                     .into(),
                             ));
                         }
@@ -360,7 +389,30 @@ fn select(v: &[f64], keep: &[bool]) -> Vec<f64> {
         .collect()
 }
 
-fn is_data_column(name: &str) -> bool {
+/// The `time` column of a table already in memory (a DataFrame's strings), ISO-8601 date-times
+/// read as the CSV reader reads them, in seconds since the epoch (an empty cell is `NaN`, which
+/// [`Run::from_columns`] refuses as a missing time); a refusal names `source`, the row and the
+/// column.
+pub fn iso_seconds<S: AsRef<str>>(source: &str, cells: &[S]) -> Result<Vec<f64>> {
+    let mut clock = IsoClock::new();
+    cells
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            clock.seconds(c.as_ref()).map_err(|reason| Error::Parse {
+                file: source.to_string(),
+                line: None,
+                row: Some(i as u64 + 1),
+                column: Some(TIME_ISO.to_string()),
+                reason,
+            })
+        })
+        .collect()
+}
+
+/// Whether a column is data (`T_`, `E_` or `U_` and a name); every other column but the time is
+/// ignored.
+pub fn is_data_column(name: &str) -> bool {
     PREFIXES
         .iter()
         .any(|p| name.starts_with(p) && name.len() > p.len())
@@ -518,6 +570,48 @@ mod tests {
         assert!(e.contains("UTF-8"), "{e}");
         let e = err(b"time_s,T_a\n0,1,2\n", NanPolicy::Error);
         assert!(e.contains("3 fields"), "{e}");
+    }
+
+    #[test]
+    fn reads_iso_date_times_as_seconds_since_the_first_row() {
+        let p = write(
+            b"time,T_a,E_z\n2025-03-04T23:59:45,20,0\n2025-03-05 00:00:00,21,1\n\
+              2025-03-05T00:00:15.25,22,2\n",
+        );
+        let r = Run::read_csv(&p.0, NanPolicy::Error).unwrap();
+        assert_eq!(r.time_s, [0.0, 15.0, 30.25]);
+        assert_eq!(r.names, ["T_a", "E_z"]);
+        assert!(r.ignored.is_empty());
+        // with `time_s` beside it, `time_s` is the clock and `time` an ignored column
+        let p = write(b"time,time_s,T_a\nmonday,0,20\ntuesday,15,21\n");
+        let r = Run::read_csv(&p.0, NanPolicy::Error).unwrap();
+        assert_eq!(
+            (r.time_s.as_slice(), r.ignored.as_slice()),
+            ([0.0, 15.0].as_slice(), ["time".to_string()].as_slice())
+        );
+        let e = err(
+            b"time,T_a\n2025-03-04T08:00:00,20\n04.03.2025 08:00:15,21\n",
+            NanPolicy::Error,
+        );
+        assert!(
+            e.contains("row 2") && e.contains("`time`") && e.contains("ISO-8601"),
+            "{e}"
+        );
+        let e = err(
+            b"time,T_a\n2025-03-04T08:00:00,20\n2025-03-04T08:00:00,21\n",
+            NanPolicy::Error,
+        );
+        assert!(
+            e.contains("row 2") && e.contains("`time`") && e.contains("0 s after"),
+            "{e}"
+        );
+        let e = err(b"time,T_a\n2025-03-04T08:00:00,20\n,21\n", NanPolicy::Drop);
+        assert!(e.contains("row 2") && e.contains("time is missing"), "{e}");
+        let e = err(b"T_a\n20\n", NanPolicy::Error);
+        assert!(
+            e.contains("no `time_s` column (seconds) or `time` column"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -3,25 +3,33 @@
 //! target `edge_stream` run lines through this one code path.
 
 use thermerr_core::guard::GuardedPredictor;
+use thermerr_core::timeaxis::{time_column, IsoClock, TimeKind, TIME_S};
 
 use crate::Predictor;
+
+/// A line's time field as written, and its seconds.
+pub type Stamp<'l> = (&'l str, f64);
 
 /// Where the model's features and the time are in the lines of one input.
 #[derive(Clone, Debug)]
 pub struct LineFilter {
     features: Vec<usize>,
     names: Vec<String>,
-    time: Option<usize>,
+    /// the time column and how it is written (`time_s` seconds, or `time` ISO-8601 date-times)
+    time: Option<(usize, TimeKind)>,
+    clock: IsoClock,
     width: usize,
     x: Vec<f64>,
     row: usize,
 }
 
-/// One prediction written by the filter: the line's time field as written (or, without a
-/// `time_s` column, the count of rows predicted before it) and the predicted error.
+/// One prediction written by the filter: the line's time field as written (or, without a time
+/// column, the count of rows predicted before it), that time in seconds (since the epoch for a
+/// `time` column of date-times) and the predicted error.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Output<'l> {
     pub time: Option<&'l str>,
+    pub t_s: Option<f64>,
     pub row: usize,
     pub y: f64,
 }
@@ -64,15 +72,26 @@ impl LineFilter {
         Ok(LineFilter {
             features,
             names: wanted.to_vec(),
-            time: names.iter().position(|n| *n == "time_s"),
+            time: time_column(&names),
+            clock: IsoClock::new(),
             width: names.len(),
             x: vec![0.0; p.n_inputs()],
             row: 0,
         })
     }
 
-    /// Parses the model's features of one data line; returns them and the time field as written.
-    pub fn parse_row<'l>(&mut self, line: &'l str) -> Result<(&[f64], Option<&'l str>), String> {
+    /// The name of the time column the output echoes: the input's `time_s` or `time`, or
+    /// `time_s` (then holding the row count) when the input has neither.
+    pub fn time_name(&self) -> &'static str {
+        self.time.map_or(TIME_S, |(_, k)| k.name())
+    }
+
+    /// Parses the model's features of one data line; returns them and the time field as written
+    /// with its seconds.
+    pub fn parse_row<'l>(
+        &mut self,
+        line: &'l str,
+    ) -> Result<(&[f64], Option<Stamp<'l>>), String> {
         self.parse_fields(line, false)
     }
 
@@ -83,17 +102,29 @@ impl LineFilter {
         &mut self,
         line: &'l str,
         missing_ok: bool,
-    ) -> Result<(&[f64], Option<&'l str>), String> {
+    ) -> Result<(&[f64], Option<Stamp<'l>>), String> {
         let f: Vec<&str> = line.split(',').collect();
         if f.len() != self.width {
             return Err(format!("expected {} fields, got {}", self.width, f.len()));
         }
-        let time = self.time.map(|k| f[k].trim());
-        if let Some(t) = time {
-            if !t.parse::<f64>().is_ok_and(f64::is_finite) {
-                return Err(format!("column `time_s`: not a finite number ({t:?})"));
+        let time = match self.time {
+            None => None,
+            Some((k, TimeKind::Seconds)) => {
+                let t = f[k].trim();
+                match t.parse::<f64>() {
+                    Ok(v) if v.is_finite() => Some((t, v)),
+                    _ => return Err(format!("column `time_s`: not a finite number ({t:?})")),
+                }
             }
-        }
+            Some((k, TimeKind::Iso)) => {
+                let t = f[k].trim();
+                match self.clock.seconds(t) {
+                    Ok(v) if v.is_finite() => Some((t, v)),
+                    Ok(_) => return Err("column `time`: time is missing".into()),
+                    Err(e) => return Err(format!("column `time`: {e}")),
+                }
+            }
+        };
         for ((xv, &k), name) in self.x.iter_mut().zip(&self.features).zip(&self.names) {
             let raw = f[k].trim();
             match raw.parse::<f64>() {
@@ -118,13 +149,13 @@ impl LineFilter {
             return Ok(None);
         }
         let (x, time) = self.parse_fields(l, true)?;
-        let t = time.map(|t| t.parse::<f64>().unwrap_or(f64::NAN));
-        match g.step(t, x).map_err(|e| e.to_string())? {
+        let (time, t_s) = (time.map(|t| t.0), time.map(|t| t.1));
+        match g.step(t_s, x).map_err(|e| e.to_string())? {
             None => Ok(Some(Guarded::Waiting)),
             Some(y) => {
                 let row = self.row;
                 self.row += 1;
-                Ok(Some(Guarded::Predicted(Output { time, row, y })))
+                Ok(Some(Guarded::Predicted(Output { time, t_s, row, y })))
             }
         }
     }
@@ -141,10 +172,10 @@ impl LineFilter {
             return Ok(None);
         }
         let (x, time) = self.parse_row(l)?;
-        let t = time.and_then(|t| t.parse::<f64>().ok());
-        let y = p.predict_sample_at(t, x).map_err(|e| e.to_string())?;
+        let (time, t_s) = (time.map(|t| t.0), time.map(|t| t.1));
+        let y = p.predict_sample_at(t_s, x).map_err(|e| e.to_string())?;
         let row = self.row;
         self.row += 1;
-        Ok(Some(Output { time, row, y }))
+        Ok(Some(Output { time, t_s, row, y }))
     }
 }

@@ -74,7 +74,7 @@ fn run(
     };
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
-    let mut header = format!("time_s,{target}_pred");
+    let mut header = format!("{},{target}_pred", filter.time_name());
     if shaper.is_some() {
         header.push_str(&format!(",{target}_offset"));
     }
@@ -128,12 +128,9 @@ fn run(
                 None => write!(out, "{},{}", o.row, o.y)?,
             }
             if let Some(s) = shaper.as_mut() {
-                // the rate limit is per second of time_s; without it, per row of step_s
-                // seconds (the guard's training step, else 1 s)
-                let at = o
-                    .time
-                    .and_then(|t| t.parse::<f64>().ok())
-                    .unwrap_or(o.row as f64 * step_s);
+                // the rate limit is per second of the input's time; without one, per row of
+                // step_s seconds (the guard's training step, else 1 s)
+                let at = o.t_s.unwrap_or(o.row as f64 * step_s);
                 write!(out, ",{}", s.apply(at, o.y))?;
             }
             if let Some(g) = guarded.as_ref() {

@@ -55,7 +55,8 @@ fn read_run<'py>(
     run_to_dict(py, run)
 }
 
-/// Validates in-memory columns (`data` is n × len(names), with `time_s` among the names).
+/// Validates in-memory columns (`data` is n × len(names), with `time_s` among the names, or
+/// `time` in seconds since the epoch).
 #[pyfunction]
 #[pyo3(signature = (source, names, data, nan = "error"))]
 fn run_from_columns<'py>(
@@ -73,6 +74,25 @@ fn run_from_columns<'py>(
         .collect();
     let run = Run::from_columns(source, names, columns, policy, None).map_err(PyErrWrap)?;
     run_to_dict(py, run)
+}
+
+/// A DataFrame's `time` column of ISO-8601 strings in seconds since the epoch (the core's reading
+/// of a CSV's `time` cells); `None` is a missing time.
+#[pyfunction]
+fn iso_seconds<'py>(
+    py: Python<'py>,
+    source: &str,
+    cells: Vec<Option<String>>,
+) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
+    let cells: Vec<&str> = cells.iter().map(|c| c.as_deref().unwrap_or("")).collect();
+    let out = thermerr_core::run::iso_seconds(source, &cells).map_err(PyErrWrap)?;
+    Ok(vec_to_py(py, out))
+}
+
+/// Whether the core reads a column of this name as data (`T_`, `E_`, `U_`); others are ignored.
+#[pyfunction]
+fn is_data_column(name: &str) -> bool {
+    thermerr_core::run::is_data_column(name)
 }
 
 /// Predictions shaped into CNC offsets (`thermerr_core::shape`), from a fresh state: `spec` in
@@ -122,6 +142,8 @@ fn scores<'py>(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_run, m)?)?;
     m.add_function(wrap_pyfunction!(run_from_columns, m)?)?;
+    m.add_function(wrap_pyfunction!(iso_seconds, m)?)?;
+    m.add_function(wrap_pyfunction!(is_data_column, m)?)?;
     m.add_function(wrap_pyfunction!(scores, m)?)?;
     m.add_function(wrap_pyfunction!(shape_series, m)?)?;
     Ok(())
