@@ -79,11 +79,12 @@ def test_without_holdout_uses_the_end_of_the_run_and_writes_the_report(tmp_path,
     assert {"cause", "column", "score", "gain_pct", "parameters", "evidence"} - set(rep["candidates"][0]) == {"evidence"}
     html = (out / "report.html").read_text()
     assert html.index("Verdict") < html.index("<img") and html.count("data:image/png;base64") >= 3
-    # both machines load back and simulate with the same code, giving the reported figures
+    # both machines load back and simulate with the same code from the start the report gives
+    # (the calibration's own, on the tail of the training run), giving the reported figures
     full = tr.read_run(run)
     split = round(len(full) * 0.7)
     for name, key in (("extended.toml", "extended"), ("calibrated.toml", "baseline")):
-        sim = Machine.load(out / name).simulate(full, fit_initial=20)
+        sim = Machine.load(out / name).simulate(full, initial_k=rep[key]["initial_k"])
         r = full["E_z"][split:] - sim.drift["E_z"][split:]
         # same code, same numbers: only the TOML's decimal round trip separates them
         assert np.sqrt(np.mean(r**2)) == pytest.approx(rep[key]["rmse_um"], rel=1e-9)

@@ -158,7 +158,8 @@ class MachineModel:
     def sensors(self) -> list[str]: ...
     def columns(self) -> list[str]: ...
     def simulate(
-        self, source: str, time: _F64, names: list[str], data: _F64, *, fit_initial: int = 0
+        self, source: str, time: _F64, names: list[str], data: _F64, *, fit_initial: int = 0,
+        initial_k: dict[str, float] | None = None,
     ) -> dict[str, Any]: ...
     def calibrate(
         self,

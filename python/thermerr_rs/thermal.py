@@ -111,11 +111,13 @@ class Machine:
         """Every run column the machine reads."""
         return self._inner.columns()
 
-    def simulate(self, run: Run, *, fit_initial: int = 0) -> Simulation:
+    def simulate(self, run: Run, *, fit_initial: int = 0, initial_k: dict[str, float] | None = None) -> Simulation:
         """Simulate ``run`` from its inputs and boundary columns. ``fit_initial=N`` estimates the
         sensed nodes' initial temperatures from the first N readings (least squares) instead of
-        taking the first reading as it is."""
-        d = self._inner.simulate(*_run_args(run), fit_initial=int(fit_initial))
+        taking the first reading as it is; ``initial_k`` gives the start instead, K added to each
+        named node's start (a diagnosis report's ``baseline.initial_k`` reproduces its figures)."""
+        d = self._inner.simulate(*_run_args(run), fit_initial=int(fit_initial),
+                                 initial_k=None if initial_k is None else {str(k): float(v) for k, v in initial_k.items()})
         return Simulation(run.time_s, d["node_names"], d["nodes"], d["sensors"], d["drift"])
 
     def calibrate(self, run: Run, axis: str | None = None, *, bound_factor: float = 3.0,

@@ -88,10 +88,7 @@ impl LineFilter {
 
     /// Parses the model's features of one data line; returns them and the time field as written
     /// with its seconds.
-    pub fn parse_row<'l>(
-        &mut self,
-        line: &'l str,
-    ) -> Result<(&[f64], Option<Stamp<'l>>), String> {
+    pub fn parse_row<'l>(&mut self, line: &'l str) -> Result<(&[f64], Option<Stamp<'l>>), String> {
         self.parse_fields(line, false)
     }
 

@@ -122,7 +122,8 @@ impl PyMachine {
 
     /// Simulates a run: dict with `nodes` (n × n_nodes), `node_names`, `sensors` {column: series},
     /// `drift` {axis: series}.
-    #[pyo3(signature = (source, time, names, data, *, fit_initial = 0))]
+    #[pyo3(signature = (source, time, names, data, *, fit_initial = 0, initial_k = None))]
+    #[allow(clippy::too_many_arguments)]
     fn simulate<'py>(
         &self,
         py: Python<'py>,
@@ -131,13 +132,26 @@ impl PyMachine {
         names: Vec<String>,
         data: PyReadonlyArray2<'py, f64>,
         fit_initial: usize,
+        initial_k: Option<std::collections::BTreeMap<String, f64>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let run = core_run(source, &time, names, &data)?;
         let sim = crate::detach(py, || {
             let view = RunView::new(&run);
             self.inner
                 .check_columns(&self.file, &run.source, |c| view.has(c))?;
-            let init = if fit_initial > 0 {
+            let init = if let Some(named) = &initial_k {
+                if fit_initial > 0 {
+                    return Err(thermerr_core::Error::InvalidParam {
+                        name: "initial_k",
+                        reason: "give the start (initial_k) or estimate it (fit_initial), not both"
+                            .into(),
+                    });
+                }
+                Init::Offsets(thermerr_core::thermal::calibrate::offsets_by_name(
+                    &self.inner,
+                    named,
+                )?)
+            } else if fit_initial > 0 {
                 Init::Offsets(thermerr_core::thermal::calibrate::fit_initial_offsets(
                     &self.inner,
                     &view,

@@ -8,6 +8,8 @@
 //! stacks the sensed temperatures and the error axis, each divided by its noise level, plus weak
 //! priors that keep unidentifiable parameters near the user's estimate.
 
+use std::collections::BTreeMap;
+
 use faer::Mat;
 
 use super::machine::{Machine, NodeSpec};
@@ -530,6 +532,45 @@ fn calibrate_all_rows(
         n_iter,
         converged,
     })
+}
+
+/// Initial offsets (K, added to each node's formats.md start) by node name, every node's, in
+/// the machine's order: how a report records the start it simulated from.
+pub fn named_offsets(m: &Machine, off: &[f64]) -> BTreeMap<String, f64> {
+    m.nodes
+        .iter()
+        .zip(off.iter().chain(std::iter::repeat(&0.0)))
+        .map(|(n, &v)| (n.name.clone(), v))
+        .collect()
+}
+
+/// The offsets of [`named_offsets`] back as the simulation's vector; a name the machine lacks,
+/// or an offset that is not finite, is refused naming it (nodes not named start at 0).
+pub fn offsets_by_name(m: &Machine, named: &BTreeMap<String, f64>) -> Result<Vec<f64>> {
+    let mut off = vec![0.0; m.nodes.len()];
+    for (name, &v) in named {
+        let i = m.node_index(name).ok_or_else(|| {
+            Error::param(
+                "initial_k",
+                format!(
+                    "the machine has no node `{name}` (nodes: {})",
+                    m.nodes
+                        .iter()
+                        .map(|n| n.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )
+        })?;
+        if !v.is_finite() {
+            return Err(Error::param(
+                "initial_k",
+                format!("`{name}`: {v} is not a finite offset"),
+            ));
+        }
+        off[i] = v;
+    }
+    Ok(off)
 }
 
 /// Initial offsets of the sensed nodes that best explain the first `window` readings of a run

@@ -88,6 +88,10 @@ impl Default for DiagnoseOptions {
 /// Figures of one model on the held-out data; serialises as the report's three figures.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Holdout {
+    /// The simulation's start (K added to each node's formats.md start, by node): the
+    /// calibration's fitted offsets on the tail of the training run, those estimated from a
+    /// separate run's first readings otherwise.
+    pub initial_k: BTreeMap<String, f64>,
     pub rmse_um: f64,
     pub max_abs_um: f64,
     pub band_um: f64,
