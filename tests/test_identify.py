@@ -179,7 +179,16 @@ def test_cli_init_writes_and_prints(tmp_path, capsys):
     assert "ambient: T_ambient" in text
     assert "E_x: training RMS" in text and "held-out RMS" in text
     assert text.count("time constant") == 5
+    # the probe's noise (0.15 µm in this run) printed for scale; a network that fits within twice
+    # it gets no warning
+    assert "probe noise 0.16 µm" in text and "note: held out" not in text
     assert Machine.load(out).axes == ["E_x"]
+    # one node cannot hold the lathe: the held-out error is many times the noise, and init says
+    # what that means for a diagnosis
+    assert main(["init", str(run), "--axis", "E_x", "--out", str(tmp_path / "one.toml"), "--nodes", "1"]) == 0
+    text = capsys.readouterr().out
+    assert "note: held out, this network leaves more than 2x the probe noise on E_x (" in text
+    assert "--nodes N" in text and "# note: held out" in (tmp_path / "one.toml").read_text()
     assert out.read_text().startswith("# Identified by `thermerr init`")
 
 

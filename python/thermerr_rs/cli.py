@@ -385,7 +385,10 @@ def cmd_init(args: argparse.Namespace) -> int:
                    f"(first-order fit {nd['tau_fit_s']:.0f} s){heat}{others}")
     for a in s["axes"]:
         _say(args, f"{a['axis']}: training RMS {a['train_rmse_um']:.3f} µm, "
-                   f"held-out RMS {a['holdout_rmse_um']:.3f} µm (last {s['holdout_rows']} rows)")
+                   f"held-out RMS {a['holdout_rmse_um']:.3f} µm (last {s['holdout_rows']} rows; "
+                   f"probe noise {a['noise_um']:.2f} µm)")
+    for note in s["notes"]:
+        _say(args, f"note: {note}")
     _say(args, f"wrote {args.out}")
     return 0
 

@@ -123,6 +123,8 @@ pub struct AxisFit {
     pub axis: String,
     pub train_rmse_um: f64,
     pub holdout_rmse_um: f64,
+    /// The probe's noise on the training rows (the diagnosis's estimate), for scale.
+    pub noise_um: f64,
 }
 
 /// The identified machine and every choice made on the way.
@@ -1061,7 +1063,32 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             axis: ax.clone(),
             train_rmse_um: rms((0..m).map(|i| pred[i] - e[i])),
             holdout_rmse_um: rms((m..n).map(|i| pred[i] - e[i])),
+            noise_um: noise_level(&e[..m]),
         });
+    }
+    // what a diagnosis with this network will make of it: held-out error beyond the `none` bar
+    // is either a cause or a remainder, and a remainder is the likelier answer
+    let ratio = super::diagnose::DiagnoseOptions::default().noise_ratio;
+    let over: Vec<String> = axes
+        .iter()
+        .filter(|a| n > m && a.holdout_rmse_um > ratio * a.noise_um)
+        .map(|a| {
+            format!(
+                "{} ({:.1}x)",
+                a.axis,
+                a.holdout_rmse_um / a.noise_um.max(1e-12)
+            )
+        })
+        .collect();
+    if !over.is_empty() {
+        notes.push(format!(
+            "held out, this network leaves more than {ratio}x the probe noise on {}: that is for \
+             the diagnosis to explain, as a cause it can name or as a shortcoming of this network \
+             (an unexplained remainder); where most axes show it, compare `--nodes N` (2-{}) or \
+             write the network from the machine's drawings",
+            over.join(", "),
+            opts.max_nodes
+        ));
     }
     machine.identified = Some(Identified {
         source: file.clone(),
