@@ -169,7 +169,7 @@ impl Run {
                     line: Some(line),
                     row: Some(row),
                     column: Some(names[j].clone()),
-                    reason: format!("{cell:?} is not a number"),
+                    reason: not_a_number(cell),
                 })?;
                 cells[j].push(v);
             }
@@ -418,6 +418,18 @@ pub fn is_data_column(name: &str) -> bool {
         .any(|p| name.starts_with(p) && name.len() > p.len())
 }
 
+/// The refusal of a cell that is not a number, with the likely fix for a decimal comma (a
+/// spreadsheet saved in a German or French locale writes `20,5` for 20.5).
+fn not_a_number(cell: &str) -> String {
+    let dotted = cell.trim().replacen(',', ".", 1);
+    match parse_cell(&dotted) {
+        Some(_) if cell.matches(',').count() == 1 => {
+            format!("{cell:?} is not a number (a decimal comma? write {dotted})")
+        }
+        _ => format!("{cell:?} is not a number"),
+    }
+}
+
 fn parse_cell(cell: &str) -> Option<f64> {
     if cell.is_empty() || cell.eq_ignore_ascii_case("nan") {
         return Some(f64::NAN);
@@ -519,6 +531,12 @@ mod tests {
         }
     }
 
+    fn read_err(text: &[u8], delimiter: u8) -> String {
+        Run::from_csv_reader_with(text, "t.csv", NanPolicy::Error, delimiter)
+            .unwrap_err()
+            .to_string()
+    }
+
     fn err(text: &[u8], nan: NanPolicy) -> String {
         let p = write(text);
         Run::read_csv(&p.0, nan).unwrap_err().to_string()
@@ -555,6 +573,14 @@ mod tests {
             e.contains("row 2") && e.contains("`T_a`") && e.contains("line 3"),
             "{e}"
         );
+        let e = read_err(b"time_s;T_a\n0;20,5\n", b';');
+        assert!(
+            e.contains("row 1")
+                && e.contains("\"20,5\" is not a number (a decimal comma? write 20.5)"),
+            "{e}"
+        );
+        let e = read_err(b"time_s;T_a\n0;1,2,3\n", b';');
+        assert!(e.ends_with("\"1,2,3\" is not a number"), "{e}");
         let e = err(b"time_s,T_a\n0,20\n0,21\n", NanPolicy::Error);
         assert!(
             e.contains("strictly increasing") && e.contains("row 2"),
