@@ -229,3 +229,25 @@ def test_cli_fit_writes_a_guard_unless_told_not_to(example_run1, tmp_path):
     with pytest.raises(SystemExit) as e:
         main(["fit", str(example_run1), "--axis", "E_z", "--out", str(out), "--hold", "-1"])
     assert e.value.code == 2
+
+
+def test_a_sensor_stuck_in_the_training_run_is_pointed_out(example_run1):
+    """The guard learns `stuck_s` as twice the longest repeat in training, so a sensor stuck
+    while the training run was logged teaches it to accept that; add_guard says so, naming the
+    sensor, the row and the length. A clean run warns of nothing."""
+    import warnings
+
+    run = tr.read_run(example_run1)
+    model = tr.MLR().fit_run(run, "E_z", SENSORS, inputs="rise")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tr.add_guard(model, run, fallbacks=False)
+    cols = {name: np.array(run[name], dtype=np.float64) for name in ["time_s", *SENSORS, "E_z"]}
+    cols["T_s10"][50:71] = cols["T_s10"][50]  # 20 steps of 150 s: 3 000 s
+    stuck = tr.Run.from_frame(cols, source="stuck.csv")
+    model = tr.MLR().fit_run(stuck, "E_z", SENSORS, inputs="rise")
+    with pytest.warns(UserWarning, match=r"stuck.csv: T_s10 repeats one reading for 3000 s from row 51 of the training "
+                                         r"run: .* stuck only after 6000 s") as rec:
+        tr.add_guard(model, stuck, fallbacks=False)
+    assert len(rec) == 1
+    assert model.guard_["sensors"][SENSORS.index("T_s10")]["stuck_s"] == 6000.0

@@ -14,6 +14,7 @@ their numbers are the core's (``thermerr_core::guard``); docs/edge.md explains t
 from __future__ import annotations
 
 import json
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -61,9 +62,18 @@ def add_guard(model: Estimator, run: Run, *, hold_s: float = DEFAULT_HOLD_S, fal
     features = _features(model)
     target = model.target_name_
     assert target is not None
-    guard_json, takes_fallbacks = _core.guard_from_training(
+    guard_json, takes_fallbacks, repeats = _core.guard_from_training(
         model.to_json(), np.ascontiguousarray(run.matrix(features)), run.time_s, float(hold_s)
     )
+    for j, row, seconds in repeats:
+        warnings.warn(
+            f"{run.source}: {features[j]} repeats one reading for {seconds:.0f} s from row {row + 1} of the "
+            f"training run: if that sensor was stuck, the model learnt from it and the guard will call it "
+            f"stuck only after {2 * seconds:.0f} s (fit on a run without it); a logger's coarse resolution "
+            "on a steady temperature repeats too",
+            UserWarning,
+            stacklevel=2,
+        )
     guard: dict[str, Any] = json.loads(guard_json)
     history = getattr(model, "input_history_", None)
     taus = history["tau_s"] if history else None

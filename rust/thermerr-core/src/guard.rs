@@ -81,10 +81,34 @@ pub struct Guard {
     pub fallbacks: Vec<Fallback>,
 }
 
+/// A reading the training run repeats exactly for long enough to raise its sensor's `stuck_s`
+/// above [`STUCK_FLOOR_S`]: a sensor stuck while the training run was logged (which the model
+/// then learnt from, and the guard learnt to accept for twice as long), or a logger's coarse
+/// resolution on a steady temperature.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LongRepeat {
+    /// the feature, in the model's order
+    pub feature: usize,
+    /// the repeat's first row (0-based) and its length (s)
+    pub from_row: usize,
+    pub seconds: f64,
+}
+
 impl Guard {
     /// Limits learnt from a training run: `x` row-major with `d` columns, `times` in seconds
     /// (one per row) or `None` for rows 1 s apart.
     pub fn from_training(x: &[f64], d: usize, times: Option<&[f64]>, hold_s: f64) -> Result<Self> {
+        Guard::from_training_with_repeats(x, d, times, hold_s).map(|(g, _)| g)
+    }
+
+    /// [`Guard::from_training`], and the training run's [`LongRepeat`]s (the longest of each
+    /// sensor that raised its `stuck_s`), for the caller to point out.
+    pub fn from_training_with_repeats(
+        x: &[f64],
+        d: usize,
+        times: Option<&[f64]>,
+        hold_s: f64,
+    ) -> Result<(Self, Vec<LongRepeat>)> {
         if d == 0 || x.len() % d != 0 || x.len() < 2 * d {
             return Err(Error::Shape(format!(
                 "the guard needs at least 2 rows of {d} features, got {} values",
@@ -123,11 +147,13 @@ impl Guard {
         }
         // every step is positive here, so the median step exists
         let step_s = median_step(&clock).unwrap_or(1.0);
+        let mut repeats = Vec::new();
         let sensors = (0..d)
             .map(|j| {
                 let col = |i: usize| x[i * d + j];
                 let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-                let (mut rate, mut repeat, mut run_start) = (0.0f64, 0.0f64, time(0));
+                let (mut rate, mut repeat, mut run_start, mut start_row, mut repeat_row) =
+                    (0.0f64, 0.0f64, time(0), 0usize, 0usize);
                 for i in 0..n {
                     lo = lo.min(col(i));
                     hi = hi.max(col(i));
@@ -136,9 +162,20 @@ impl Guard {
                         rate = rate.max((col(i) - col(i - 1)).abs() / dt);
                         if col(i) != col(i - 1) {
                             run_start = time(i);
+                            start_row = i;
                         }
-                        repeat = repeat.max(time(i) - run_start);
+                        if time(i) - run_start > repeat {
+                            repeat = time(i) - run_start;
+                            repeat_row = start_row;
+                        }
                     }
+                }
+                if 2.0 * repeat > STUCK_FLOOR_S {
+                    repeats.push(LongRepeat {
+                        feature: j,
+                        from_row: repeat_row,
+                        seconds: repeat,
+                    });
                 }
                 let margin = (hi - lo).max(RANGE_MARGIN_FLOOR);
                 SensorLimits {
@@ -149,12 +186,13 @@ impl Guard {
                 }
             })
             .collect();
-        Ok(Guard {
+        let g = Guard {
             sensors,
             hold_s,
             step_s,
             fallbacks: Vec::new(),
-        })
+        };
+        Ok((g, repeats))
     }
 
     /// Checks the guard against the model file around it: one limit per feature, finite and

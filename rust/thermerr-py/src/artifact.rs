@@ -208,7 +208,7 @@ fn guard_from_training(
     x: PyReadonlyArray2<'_, f64>,
     times: Option<PyReadonlyArray1<'_, f64>>,
     hold_s: f64,
-) -> PyResult<(String, bool)> {
+) -> PyResult<(String, bool, Vec<(usize, usize, f64)>)> {
     let p = thermerr_core::artifact::Predictor::from_json(text).map_err(PyErrWrap)?;
     let fallbacks = thermerr_core::guard::takes_fallbacks(&p);
     let xs = samples(&x)?;
@@ -216,10 +216,19 @@ fn guard_from_training(
         Some(a) => Some(slice1(a)?),
         None => None,
     };
-    let g = thermerr_core::guard::Guard::from_training(xs.as_slice(), xs.ncols(), t, hold_s)
-        .map_err(PyErrWrap)?;
+    let (g, repeats) = thermerr_core::guard::Guard::from_training_with_repeats(
+        xs.as_slice(),
+        xs.ncols(),
+        t,
+        hold_s,
+    )
+    .map_err(PyErrWrap)?;
     let g = serde_json::to_string(&g).map_err(|e| format_err(e.to_string()))?;
-    Ok((g, fallbacks))
+    let repeats = repeats
+        .into_iter()
+        .map(|r| (r.feature, r.from_row, r.seconds))
+        .collect();
+    Ok((g, fallbacks, repeats))
 }
 
 /// A run's raw readings (NaN where missing) through a guarded model file, row by row as

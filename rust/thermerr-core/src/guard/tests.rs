@@ -285,3 +285,36 @@ fn a_guard_survives_a_write_and_read() {
     let plain = Artifact::from_json(&mlr(&["T_a"], &[1.0], "absolute", None).to_string()).unwrap();
     assert!(!plain.to_json().unwrap().contains("guard"));
 }
+
+#[test]
+fn long_training_repeats_are_reported_with_their_rows() {
+    // feature 0 changes every row; feature 1 holds one value over rows 3..=12 (rows 60 s apart:
+    // 540 s, under half the floor, not reported) and then 20..=60 (2 400 s: reported)
+    let n = 80;
+    let t: Vec<f64> = (0..n).map(|i| 60.0 * i as f64).collect();
+    let mut x = Vec::with_capacity(2 * n);
+    for i in 0..n {
+        let held = (3..=12).contains(&i) || (20..=60).contains(&i);
+        x.push(20.0 + 0.01 * i as f64);
+        x.push(if held {
+            if i <= 12 {
+                21.0
+            } else {
+                22.0
+            }
+        } else {
+            20.0 + 0.013 * i as f64
+        });
+    }
+    let (g, r) = Guard::from_training_with_repeats(&x, 2, Some(&t), 60.0).unwrap();
+    assert_eq!(
+        r,
+        vec![LongRepeat {
+            feature: 1,
+            from_row: 20,
+            seconds: 2400.0
+        }]
+    );
+    assert_eq!(g.sensors[1].stuck_s, 4800.0);
+    assert_eq!(g, Guard::from_training(&x, 2, Some(&t), 60.0).unwrap());
+}
