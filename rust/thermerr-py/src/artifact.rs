@@ -198,6 +198,9 @@ impl PyPreprocessing {
     }
 }
 
+/// A long repeat of the training run: (feature, first row, seconds).
+type Repeat = (usize, usize, f64);
+
 /// Sensor-fault limits learnt from training readings `x` (rows at `times` seconds), as the
 /// JSON of a model file's `guard` (no fallbacks: Python fits those), and whether the model file
 /// `text` can use fallback models (one without state from sample to sample).
@@ -208,7 +211,7 @@ fn guard_from_training(
     x: PyReadonlyArray2<'_, f64>,
     times: Option<PyReadonlyArray1<'_, f64>>,
     hold_s: f64,
-) -> PyResult<(String, bool, Vec<(usize, usize, f64)>)> {
+) -> PyResult<(String, bool, Vec<Repeat>)> {
     let p = thermerr_core::artifact::Predictor::from_json(text).map_err(PyErrWrap)?;
     let fallbacks = thermerr_core::guard::takes_fallbacks(&p);
     let xs = samples(&x)?;
