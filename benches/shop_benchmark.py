@@ -18,7 +18,7 @@ Models, each fitted per channel on the training rows, with no tuning:
   * fixed defaults: ``MLR()``, ``RBFNetwork()`` (the constructor's default, design "exact"),
     the CLI's ``--model rbf`` default (``MinMaxScaled(RBFNetwork(design="ols", goal=0.1·n))``),
     ``SVR()``, ``BPNetwork()``, ``GreyBP()``, ``HybridFilterNet()`` (a refusal is printed as such);
-  * auto: ``select_model(..., history=[900, 3600])`` — the CLI's ``--model auto --history 900,3600``
+  * auto: ``select_model(..., history=[900, 3600])`` — the CLI's ``--model auto`` (its default history)
     (the README's example time constants), 5 time-ordered splits of the training rows, budget
     ``BUDGET_S`` per channel; its fit time includes the whole search and the refit.
 

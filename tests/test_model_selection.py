@@ -106,8 +106,15 @@ def test_cli_model_auto(example_run1, example_run2, tmp_path, capsys):
                  "--cv", "3", "--test", str(example_run2), "--out", str(out), "--json", "--no-fallbacks"]) == 0
     report = json.loads(capsys.readouterr().out)
     board = report["selection"]["leaderboard"]
-    assert len(board) == 21 and report["model"] == board[0]["model"]
+    # without --history, auto tries every candidate without and with AUTO_HISTORY (900 s, 1 h)
+    assert len(board) == 42 and report["model"] == board[0]["model"]
+    assert sum(e["history"] == [900.0, 3600.0] for e in board) == 21
     assert json.loads(out.read_text())["kind"] == board[0]["family"]
+    # --history none: the candidates without
+    assert main(["fit", str(example_run1), "--axis", "E_z", "--model", "auto", "--sensors", ",".join(SENSORS),
+                 "--cv", "3", "--history", "none", "--out", str(out), "--json", "--no-fallbacks"]) == 0
+    board = json.loads(capsys.readouterr().out)["selection"]["leaderboard"]
+    assert len(board) == 21 and all(e["history"] is None for e in board)
 
 
 def test_cli_model_auto_with_tune(example_run1, tmp_path, capsys):
@@ -115,8 +122,8 @@ def test_cli_model_auto_with_tune(example_run1, tmp_path, capsys):
 
     out = tmp_path / "auto.json"
     assert main(["fit", str(example_run1), "--axis", "E_z", "--model", "auto", "--sensors", ",".join(SENSORS),
-                 "--cv", "3", "--tune", "pso", "--pop", "4", "--iters", "2", "--out", str(out), "--json",
-                 "--no-fallbacks"]) == 0
+                 "--cv", "3", "--tune", "pso", "--pop", "4", "--iters", "2", "--history", "none", "--out", str(out),
+                 "--json", "--no-fallbacks"]) == 0
     board = json.loads(capsys.readouterr().out)["selection"]["leaderboard"]
     assert len(board) == 22 and sum(e["tuned"] == ["pso", 4, 2] for e in board) == 1
 
@@ -130,4 +137,4 @@ def test_cli_model_auto_draws_a_bar_on_a_terminal(example_run1, tmp_path, capsys
                      "--cv", "3", "--out", str(out), "--no-fallbacks"]) == 0
     err = capsys.readouterr().err
     assert "model selection" in err and "candidate" in err  # the tqdm bar, not a line per candidate
-    assert "candidate 1/21" not in err
+    assert "candidate 1/42" not in err

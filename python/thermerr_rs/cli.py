@@ -110,7 +110,10 @@ def _thin(text: str) -> int | str:
 
 
 def _taus(text: str) -> list[float]:
-    """An argparse type: comma-separated time constants in seconds, each > 0."""
+    """An argparse type: comma-separated time constants in seconds, each > 0; ``none``: no history
+    (an empty list, which ``--model auto`` takes as "do not try one")."""
+    if text.strip().lower() == "none":
+        return []
     try:
         taus = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
@@ -168,7 +171,7 @@ def _make_svr(args: argparse.Namespace, run: Run, sensors: list[str]) -> Estimat
     from .base import _history, run_inputs
     from .swarm import tune_svr
 
-    x = run_inputs(run, sensors, args.inputs, _history(args.history, run.time_s))
+    x = run_inputs(run, sensors, args.inputs, _history(args.history or None, run.time_s))
     res = tune_svr(x, run[args.axis], method=args.tune, cv=args.cv,
                    cv_kind=args.cv_kind, gap=args.gap, epsilon=args.epsilon, pop=args.pop or 20,
                    iters=args.iters or 100, seed=args.seed, thin=args.thin, progress=_progress_enabled(args))
@@ -253,8 +256,11 @@ def cmd_fit(args: argparse.Namespace) -> int:
             bar.set_postfix_str(label, refresh=False)
             bar.refresh()
 
+        from .model_selection import AUTO_HISTORY
+
+        history = list(AUTO_HISTORY) if args.history is None else args.history
         try:
-            selection = select_model(run, args.axis, sensors, history=args.history, inputs=args.inputs,
+            selection = select_model(run, args.axis, sensors, history=history, inputs=args.inputs,
                                      cv=args.cv, gap=args.gap, budget_s=args.budget, seed=args.seed,
                                      tune=args.tune, tune_pop=args.pop or 10, tune_iters=args.iters or 10,
                                      progress=step)
@@ -269,7 +275,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
             model = _make_svr(args, run, sensors)
         else:
             model = _make_model(args, len(run))
-        model.fit_run(run, args.axis, sensors, inputs=args.inputs, history=args.history)
+        model.fit_run(run, args.axis, sensors, inputs=args.inputs, history=args.history or None)
     name = selection.best.candidate.label() if selection is not None else args.model
     _say(args, f"fitted {name} on {len(run)} samples of {run.source}: {args.axis} from {', '.join(sensors)}")
     report: dict[str, Any] = {"model": name, "axis": args.axis, "sensors": sensors}
@@ -528,7 +534,7 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("run", help="measured run CSV")
     f.add_argument("--axis", required=True, help="error column to model, e.g. E_z")
     f.add_argument("--model", choices=["mlr", "rbf", "svr", "greybp", "gm1n", "bp", "hybrid", "auto"], default="mlr",
-                   help="family to fit, or 'auto': MLR, RBF and SVR candidates (with and without --history) scored "
+                   help="family to fit, or 'auto': MLR, RBF and SVR candidates (with and without --history, 900,3600 unless given) scored "
                         "on --cv time-ordered splits of the run, the best refitted (default mlr)")
     f.add_argument("--budget", type=float, default=None, metavar="SECONDS",
                    help="--model auto: start no new candidate after this many seconds")
@@ -580,7 +586,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="model from each sensor's rise since the run's start (default) or absolute readings")
     f.add_argument("--history", type=_taus, default=None, metavar="TAU,...",
                    help="also read each sensor's rise over about the last TAU seconds (first-order filters), "
-                        "e.g. 900,3600; kept as state on the edge")
+                        "e.g. 900,3600; kept as state on the edge. --model auto tries 900,3600 beside none "
+                        "unless given ('none': no history)")
     f.add_argument("--test", help="a held-out run to score the model on")
     f.add_argument("--no-guard", action="store_true",
                    help="write no sensor-fault guard (default: limits learnt from the run and, for mlr/rbf/svr/bp, "

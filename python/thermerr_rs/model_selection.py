@@ -39,6 +39,11 @@ EDGE_SAMPLES = 1000
 #: families :func:`select_model` knows, in the order they are tried
 FAMILIES: tuple[str, ...] = ("mlr", "rbf", "svr")
 
+#: the temperature history ``thermerr fit --model auto`` tries beside none when ``--history`` is
+#: not given: each reading's rise over about the last 15 min and 1 h (the time constants of a
+#: machine's structure behind its surface sensors; docs/methods.md, the lagged shop run)
+AUTO_HISTORY: tuple[float, ...] = (900.0, 3600.0)
+
 
 @dataclass(frozen=True)
 class Candidate:
