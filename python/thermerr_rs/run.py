@@ -19,7 +19,7 @@ def _date_times(col: Any, source: str) -> F64:
     """A frame's ``time`` column in seconds since the epoch: ``datetime64`` values (UTC for
     time-zone aware ones) converted here, strings read by the core's ISO-8601 reader (as a CSV's
     ``time`` cells are)."""
-    dt = getattr(col, "dt", None)
+    dt: Any = getattr(col, "dt", None)
     if getattr(dt, "tz", None) is not None:  # pandas, time-zone aware: the instants in UTC
         col = dt.tz_convert("UTC").dt.tz_localize(None)
     if getattr(getattr(col, "dtype", None), "tz", None) is not None:  # a time-zone aware index
@@ -81,7 +81,7 @@ class Run:
         reads them), else a pandas ``DatetimeIndex``; a run's ``time_s`` then counts seconds
         from its first row."""
         names = [str(c) for c in df.columns] if hasattr(df, "columns") else [str(k) for k in df]
-        index = getattr(df, "index", None)
+        index: Any = getattr(df, "index", None)
         from_index = (
             "time_s" not in names and "time" not in names and getattr(getattr(index, "dtype", None), "kind", "") == "M"
         )
@@ -89,7 +89,7 @@ class Run:
             names = ["time", *names]
         cols = []
         for name in names:
-            col = index if from_index and name == "time" else df[name]
+            col: Any = index if from_index and name == "time" else df[name]
             if name == "time" and "time_s" not in names:
                 cols.append(_date_times(col, source))
                 continue
