@@ -53,6 +53,7 @@ use super::sim::{simulate, Init, RunView};
 use crate::error::{Error, Result};
 use crate::fcm::FcmParams;
 use crate::linalg::lstsq;
+use crate::metrics::pearson;
 use crate::run::Run;
 use crate::samples::Samples;
 
@@ -159,25 +160,6 @@ fn lowpass(t: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
         y[i] = a * y[i - 1] + (1.0 - a) * p[i - 1];
     }
     y
-}
-
-fn pearson(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len().min(b.len()) as f64;
-    if n < 2.0 {
-        return 0.0;
-    }
-    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
-    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
-    for (x, y) in a.iter().zip(b) {
-        sab += (x - ma) * (y - mb);
-        saa += (x - ma).powi(2);
-        sbb += (y - mb).powi(2);
-    }
-    if saa <= 0.0 || sbb <= 0.0 {
-        0.0
-    } else {
-        sab / (saa * sbb).sqrt()
-    }
 }
 
 /// Least squares without intercept; returns the coefficients and the residual sum of squares.

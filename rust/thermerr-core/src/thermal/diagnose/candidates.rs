@@ -9,6 +9,7 @@ use crate::thermal::calibrate::{
 };
 use crate::thermal::machine::{Ambient, InputTerm, LinkSpec, Machine, NodeSpec};
 use crate::thermal::sim::RunView;
+use serde::Serialize;
 
 /// One extension before fitting: the extended machine and its extra free parameters.
 #[derive(Clone, Debug)]
@@ -284,7 +285,7 @@ pub(super) fn fit(
             cal = cold;
         }
     }
-    scored(spec, cal, base, held, Fit::Full)
+    scored(spec, cal, base, train, held, Fit::Full)
 }
 
 /// The screening fit of one extension: the thermal network held at the current model's
@@ -316,19 +317,103 @@ pub(super) fn screen(
         .iter()
         .filter(|f| !matches!(f.param, Param::InitOffset(_)))
         .count();
-    scored(spec, cal, base, held, Fit::Screen)
+    scored(spec, cal, base, train, held, Fit::Screen)
+}
+
+/// The other sensors on a drifting sensor's part, and what they say of the drift.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Mates {
+    /// Temperature columns the machine does not read whose rise over the training rows follows
+    /// the sensor's (Pearson r ≥ [`MATE_R`]): other sensors on the same part.
+    pub columns: Vec<String>,
+    /// The least-squares trend of the sensor minus the mates' mean over the training rows, K/h.
+    pub trend_k_per_h: f64,
+    /// Whether that trend carries the fitted drift: the same sign and at least
+    /// [`MATE_SHARE`] of its size.
+    pub corroborate: bool,
+}
+
+/// How closely another sensor's rise must follow the drifting sensor's to count as its mate.
+pub const MATE_R: f64 = 0.99;
+/// The share of a fitted sensor drift that its mates' difference must show.
+pub const MATE_SHARE: f64 = 0.5;
+
+/// A sensor drift of `k_per_h` on `col`, checked against the run's other sensors on the same
+/// part: a sensor that really drifts leaves its mates behind at its drift rate, while a part that
+/// warms (what a network too coarse to follow it would call a drift) takes its mates along.
+/// `None` when the run has no mate for `col` (nothing to check: the candidate stands on the
+/// diagnosis's other evidence).
+pub fn mates(
+    m: &Machine,
+    train: &RunView<'_>,
+    rows: usize,
+    col: &str,
+    k_per_h: f64,
+) -> Option<Mates> {
+    let x = train.col(col).ok()?;
+    let n = rows.min(x.len());
+    if n < 3 {
+        return None;
+    }
+    let rise = |v: &[f64]| -> Vec<f64> { v[..n].iter().map(|a| a - v[0]).collect() };
+    let rx = rise(x);
+    let mut columns = Vec::new();
+    let mut mean = vec![0.0; n];
+    // in name order, so that the mean is summed the same way on every call
+    for c in free_columns(m, train) {
+        if c == col {
+            continue;
+        }
+        let Ok(v) = train.col(&c) else { continue };
+        let rv = rise(v);
+        if crate::metrics::pearson(&rx, &rv) >= MATE_R {
+            mean.iter_mut().zip(&v[..n]).for_each(|(a, b)| *a += b);
+            columns.push(c);
+        }
+    }
+    if columns.is_empty() {
+        return None;
+    }
+    let k = columns.len() as f64;
+    let d: Vec<f64> = (0..n).map(|i| x[i] - mean[i] / k).collect();
+    let t: Vec<f64> = train.time[..n].iter().map(|s| s / 3600.0).collect();
+    let (tm, dm) = (
+        t.iter().sum::<f64>() / n as f64,
+        d.iter().sum::<f64>() / n as f64,
+    );
+    let sxx: f64 = t.iter().map(|a| (a - tm).powi(2)).sum();
+    let sxy: f64 = t.iter().zip(&d).map(|(a, b)| (a - tm) * (b - dm)).sum();
+    let trend = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    let corroborate = trend * k_per_h > 0.0 && trend.abs() >= MATE_SHARE * k_per_h.abs();
+    Some(Mates {
+        columns,
+        trend_k_per_h: trend,
+        corroborate,
+    })
 }
 
 fn scored(
     spec: Spec,
     cal: Calibration,
     base: &Baseline<'_>,
+    train: &RunView<'_>,
     held: &HeldOut<'_, '_>,
     fit: Fit,
 ) -> Result<Candidate> {
     let h = score::holdout(&cal, held)?;
     let sensor_gain_pct = match (spec.cause, &spec.column) {
         (Cause::SensorDrift, Some(col)) => score::sensor_gain_pct(base.holdout, &h, col),
+        _ => None,
+    };
+    let mates = match (spec.cause, &spec.column, &spec.node) {
+        (Cause::SensorDrift, Some(col), Some(node)) => cal
+            .machine
+            .node_index(node)
+            .map(|i| cal.machine.nodes[i].sensor_drift_k_per_h)
+            .and_then(|k| {
+                let rows = base.options.fit_rows.unwrap_or(train.len());
+                mates(&spec.machine, train, rows, col, k)
+            }),
         _ => None,
     };
     Ok(Candidate {
@@ -340,6 +425,7 @@ fn scored(
         gain_pct: score::gain_pct(base.holdout, &h),
         score: score::joint_score(base.holdout, &h),
         sensor_gain_pct,
+        mates,
         fit,
         holdout: h,
         calibration: cal,
@@ -521,6 +607,77 @@ exponent = 1.0
 axis = "E_z"
 um_per_k = { a = 1.0, b = 2.0 }
 "#;
+
+    #[test]
+    fn a_drift_is_corroborated_only_by_mates_it_leaves_behind() {
+        let m = Machine::from_toml(TWO, "two.toml").unwrap();
+        // 48 h at 15 min: the part warms 20 K on a first-order curve; T_b and T_c sit on it
+        // too, T_far does not follow it (r < 0.99)
+        let n = 193;
+        let t: Vec<f64> = (0..n).map(|k| 900.0 * k as f64).collect();
+        let part: Vec<f64> = t
+            .iter()
+            .map(|s| 20.0 + 20.0 * (1.0 - (-s / 20_000.0).exp()))
+            .collect();
+        let with = |drift_k_per_h: f64| -> Run {
+            let ta: Vec<f64> = part
+                .iter()
+                .zip(&t)
+                .map(|(p, s)| p + drift_k_per_h * s / 3600.0)
+                .collect();
+            let far: Vec<f64> = t.iter().map(|s| 20.0 + (s / 40_000.0).sin()).collect();
+            let names = [
+                "time_s",
+                "T_ambient",
+                "T_a",
+                "T_b",
+                "T_c",
+                "T_far",
+                "U_rpm",
+                "E_z",
+            ];
+            let cols = vec![
+                t.clone(),
+                vec![20.0; n],
+                ta,
+                part.clone(),
+                part.iter().map(|p| p + 0.1).collect(),
+                far,
+                vec![1000.0; n],
+                vec![0.0; n],
+            ];
+            Run::from_columns(
+                "<t>",
+                names.iter().map(|s| s.to_string()).collect(),
+                cols,
+                NanPolicy::Error,
+                None,
+            )
+            .unwrap()
+        };
+        // the sensor drifts 0.01 K/h (0.5 K over the run, r with its mates still above 0.99):
+        // the mates show it
+        let run = with(0.01);
+        let got = mates(&m, &RunView::new(&run), n, "T_a", 0.01).unwrap();
+        assert_eq!(got.columns, ["T_b", "T_c"]);
+        assert!((got.trend_k_per_h - 0.01).abs() < 1e-9, "{got:?}");
+        assert!(got.corroborate);
+        // a drift fitted where the sensor follows its mates exactly: not corroborated
+        let run = with(0.0);
+        let got = mates(&m, &RunView::new(&run), n, "T_a", 0.01).unwrap();
+        assert!(
+            got.trend_k_per_h.abs() < 1e-9 && !got.corroborate,
+            "{got:?}"
+        );
+        // the wrong sign is no corroboration either
+        assert!(
+            !mates(&m, &RunView::new(&with(0.01)), n, "T_a", -0.01)
+                .unwrap()
+                .corroborate
+        );
+        // no mate, no check
+        assert_eq!(mates(&m, &RunView::new(&run), n, "T_far", 0.01), None);
+    }
 
     #[test]
     fn a_chain_is_rebuilt_without_one_of_its_extensions_and_keeps_its_fitted_values() {

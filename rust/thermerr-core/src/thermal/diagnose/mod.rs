@@ -130,6 +130,10 @@ pub struct Candidate {
     pub delta_bic: f64,
     /// For sensor drift: the gain on that sensor's held-out temperature residual (%).
     pub sensor_gain_pct: Option<f64>,
+    /// For sensor drift, where the run has other sensors on the same part: whether they
+    /// corroborate the drift (see [`candidates::mates`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mates: Option<candidates::Mates>,
     #[serde(rename = "rmse_um", serialize_with = "rmse_only")]
     pub holdout: Holdout,
     pub parameters: BTreeMap<String, f64>,
@@ -620,6 +624,7 @@ pub(crate) mod tests {
             gain_pct: score::gain_pct(&baseline(), &holdout),
             delta_bic,
             sensor_gain_pct: None,
+            mates: None,
             holdout,
             parameters: BTreeMap::new(),
             fit: Fit::Full,

@@ -44,9 +44,14 @@ impl Serialize for Verdict {
 }
 
 /// Whether a candidate may be named at all: it improves the training fit, removes part of the
-/// joint held-out residual, and lowers the held-out RMS of the error axis.
+/// joint held-out residual, and lowers the held-out RMS of the error axis; a sensor drift that
+/// the sensor's own part-mates contradict (they drift with it: the part warms, the sensor is
+/// fine) is not.
 pub fn supported(c: &Candidate) -> bool {
-    c.delta_bic < MAX_DELTA_BIC && c.score > 0.0 && c.gain_pct > 0.0
+    c.delta_bic < MAX_DELTA_BIC
+        && c.score > 0.0
+        && c.gain_pct > 0.0
+        && c.mates.as_ref().is_none_or(|m| m.corroborate)
 }
 
 /// The verdict and the index of the named candidate in `cands` (sorted by score, best first):
@@ -69,6 +74,23 @@ pub fn rule(
 mod tests {
     use super::super::tests::{baseline, candidate};
     use super::*;
+
+    #[test]
+    fn a_drift_its_part_mates_share_is_not_named() {
+        let base = baseline();
+        let mut drift = candidate(Cause::SensorDrift, 0.6, 1.0, -50.0);
+        drift.mates = Some(super::super::candidates::Mates {
+            columns: vec!["T_b".into()],
+            trend_k_per_h: 0.001,
+            corroborate: false,
+        });
+        let cands = [drift.clone(), candidate(Cause::ThermalLag, 0.3, 2.0, -50.0)];
+        let (v, i) = rule(&cands, &base, 1.0, &DiagnoseOptions::default());
+        assert_eq!((v, i), (Verdict::Cause(Cause::ThermalLag), Some(1)));
+        drift.mates.as_mut().unwrap().corroborate = true;
+        let (v, _) = rule(&[drift], &base, 1.0, &DiagnoseOptions::default());
+        assert_eq!(v, Verdict::Cause(Cause::SensorDrift));
+    }
 
     #[test]
     fn names_the_best_supported_candidate() {
