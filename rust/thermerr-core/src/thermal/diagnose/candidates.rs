@@ -392,6 +392,33 @@ pub fn mates(
     })
 }
 
+/// The node sensor of `m` whose rise over the first `rows` training rows `col` follows at
+/// r ≥ [`MATE_R`]: `col` is then another sensor on a part the network already has, not a heat
+/// source outside it (an unmodelled source there would only be that part read twice).
+pub fn node_sensor_mate(
+    m: &Machine,
+    train: &RunView<'_>,
+    rows: usize,
+    col: &str,
+) -> Option<String> {
+    let x = train.col(col).ok()?;
+    let n = rows.min(x.len());
+    if n < 3 {
+        return None;
+    }
+    let rise = |v: &[f64]| -> Vec<f64> { v[..n].iter().map(|a| a - v[0]).collect() };
+    let rx = rise(x);
+    m.nodes
+        .iter()
+        .filter_map(|nd| nd.sensor.as_deref())
+        .find(|s| {
+            train
+                .col(s)
+                .is_ok_and(|v| crate::metrics::pearson(&rx, &rise(v)) >= MATE_R)
+        })
+        .map(str::to_string)
+}
+
 fn scored(
     spec: Spec,
     cal: Calibration,
@@ -405,15 +432,17 @@ fn scored(
         (Cause::SensorDrift, Some(col)) => score::sensor_gain_pct(base.holdout, &h, col),
         _ => None,
     };
+    let rows = base.options.fit_rows.unwrap_or(train.len());
+    let mate_of = match (spec.cause, &spec.column) {
+        (Cause::UnmodeledSource, Some(col)) => node_sensor_mate(&spec.machine, train, rows, col),
+        _ => None,
+    };
     let mates = match (spec.cause, &spec.column, &spec.node) {
         (Cause::SensorDrift, Some(col), Some(node)) => cal
             .machine
             .node_index(node)
             .map(|i| cal.machine.nodes[i].sensor_drift_k_per_h)
-            .and_then(|k| {
-                let rows = base.options.fit_rows.unwrap_or(train.len());
-                mates(&spec.machine, train, rows, col, k)
-            }),
+            .and_then(|k| mates(&spec.machine, train, rows, col, k)),
         _ => None,
     };
     Ok(Candidate {
@@ -426,6 +455,7 @@ fn scored(
         score: score::joint_score(base.holdout, &h),
         sensor_gain_pct,
         mates,
+        mate_of,
         fit,
         holdout: h,
         calibration: cal,
@@ -677,6 +707,13 @@ um_per_k = { a = 1.0, b = 2.0 }
         );
         // no mate, no check
         assert_eq!(mates(&m, &RunView::new(&run), n, "T_far", 0.01), None);
+        // as an unmodelled source, T_b would be the part T_a already measures; T_far would not
+        let view = RunView::new(&run);
+        assert_eq!(
+            node_sensor_mate(&m, &view, n, "T_b").as_deref(),
+            Some("T_a")
+        );
+        assert_eq!(node_sensor_mate(&m, &view, n, "T_far"), None);
     }
 
     #[test]

@@ -134,6 +134,10 @@ pub struct Candidate {
     /// corroborate the drift (see [`candidates::mates`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub mates: Option<candidates::Mates>,
+    /// For an unmodelled source: the node sensor its column follows at r ≥ 0.99, if any (see
+    /// [`candidates::node_sensor_mate`]); such a candidate is never named.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mate_of: Option<String>,
     #[serde(rename = "rmse_um", serialize_with = "rmse_only")]
     pub holdout: Holdout,
     pub parameters: BTreeMap<String, f64>,
@@ -625,6 +629,7 @@ pub(crate) mod tests {
             delta_bic,
             sensor_gain_pct: None,
             mates: None,
+            mate_of: None,
             holdout,
             parameters: BTreeMap::new(),
             fit: Fit::Full,

@@ -44,14 +44,16 @@ impl Serialize for Verdict {
 }
 
 /// Whether a candidate may be named at all: it improves the training fit, removes part of the
-/// joint held-out residual, and lowers the held-out RMS of the error axis; a sensor drift that
-/// the sensor's own part-mates contradict (they drift with it: the part warms, the sensor is
-/// fine) is not.
+/// joint held-out residual, and lowers the held-out RMS of the error axis. Not: a sensor drift
+/// that the sensor's own part-mates contradict (they drift with it: the part warms, the sensor
+/// is fine), nor an unmodelled source whose column is another sensor on a part the network
+/// already has (`mate_of`).
 pub fn supported(c: &Candidate) -> bool {
     c.delta_bic < MAX_DELTA_BIC
         && c.score > 0.0
         && c.gain_pct > 0.0
         && c.mates.as_ref().is_none_or(|m| m.corroborate)
+        && c.mate_of.is_none()
 }
 
 /// The verdict and the index of the named candidate in `cands` (sorted by score, best first):
