@@ -350,26 +350,19 @@ pub fn mates(
     col: &str,
     k_per_h: f64,
 ) -> Option<Mates> {
+    let rx = rise_of(train, rows, col)?;
+    let n = rx.len();
     let x = train.col(col).ok()?;
-    let n = rows.min(x.len());
-    if n < 3 {
-        return None;
-    }
-    let rise = |v: &[f64]| -> Vec<f64> { v[..n].iter().map(|a| a - v[0]).collect() };
-    let rx = rise(x);
     let mut columns = Vec::new();
     let mut mean = vec![0.0; n];
     // in name order, so that the mean is summed the same way on every call
     for c in free_columns(m, train) {
-        if c == col {
+        if c == col || !follows(&rx, train, &c) {
             continue;
         }
         let Ok(v) = train.col(&c) else { continue };
-        let rv = rise(v);
-        if crate::metrics::pearson(&rx, &rv) >= MATE_R {
-            mean.iter_mut().zip(&v[..n]).for_each(|(a, b)| *a += b);
-            columns.push(c);
-        }
+        mean.iter_mut().zip(&v[..n]).for_each(|(a, b)| *a += b);
+        columns.push(c);
     }
     if columns.is_empty() {
         return None;
@@ -401,22 +394,26 @@ pub fn node_sensor_mate(
     rows: usize,
     col: &str,
 ) -> Option<String> {
-    let x = train.col(col).ok()?;
-    let n = rows.min(x.len());
-    if n < 3 {
-        return None;
-    }
-    let rise = |v: &[f64]| -> Vec<f64> { v[..n].iter().map(|a| a - v[0]).collect() };
-    let rx = rise(x);
+    let rx = rise_of(train, rows, col)?;
     m.nodes
         .iter()
         .filter_map(|nd| nd.sensor.as_deref())
-        .find(|s| {
-            train
-                .col(s)
-                .is_ok_and(|v| crate::metrics::pearson(&rx, &rise(v)) >= MATE_R)
-        })
+        .find(|s| follows(&rx, train, s))
         .map(str::to_string)
+}
+
+/// A column's rise since its first reading over the first `rows` rows; `None` for a column the
+/// run lacks or fewer than three rows.
+fn rise_of(train: &RunView<'_>, rows: usize, col: &str) -> Option<Vec<f64>> {
+    let v = train.col(col).ok()?;
+    let n = rows.min(v.len());
+    (n >= 3).then(|| v[..n].iter().map(|a| a - v[0]).collect())
+}
+
+/// Whether column `other` rises as `rx` (a [`rise_of`]) does, at Pearson r ≥ [`MATE_R`]: a
+/// sensor on the same part.
+fn follows(rx: &[f64], train: &RunView<'_>, other: &str) -> bool {
+    rise_of(train, rx.len(), other).is_some_and(|r| crate::metrics::pearson(rx, &r) >= MATE_R)
 }
 
 fn scored(
