@@ -91,6 +91,27 @@ def test_rate_sweep(topology):
     assert total_id >= total_nom - MAX_SHORTFALL, rates
 
 
+@pytest.mark.parametrize("topology", ["vmc", "lathe"])
+def test_distinct_parts_are_not_lagged_copies(topology):
+    """A part heated through another follows it as a lag too (the headstock behind the bearing:
+    within 1.4-2.7 noise levels on these 8-h runs), but with a smaller rise (gain 0.2-0.44) or a
+    longer lag (the lathe's bed behind the carriage): each keeps its node."""
+    for seed in (1, 2):
+        c = syn.make_case(topology, "none", seed, hours=HOURS, dt=DT_S)
+        m, s = Machine.identify(_run(c.train, "train.csv"))
+        assert s["copies"] == [], (seed, s["copies"])
+
+
+def test_more_nodes_asked_than_parts_keeps_the_copies_as_nodes():
+    c = syn.make_shop_case(2, hours=12.0, hidden={})
+    run = _run(c.train, "shop.csv")
+    _, s = Machine.identify(run, "E_ch1", nodes=3)
+    assert len(s["nodes"]) == 3 and s["copies"]
+    _, s = Machine.identify(run, "E_ch1", nodes=6)
+    assert len(s["nodes"]) == 6 and s["copies"] == []
+    assert any("lagged copies" in n and "are nodes as well" in n for n in s["notes"])
+
+
 def test_ambient_without_its_name_is_the_coldest_column():
     c = syn.make_case("vmc", "none", 4, hours=HOURS, dt=DT_S)
     cols = {("T_t7" if k == "T_ambient" else k): v for k, v in c.train.items()}

@@ -389,6 +389,9 @@ def cmd_init(args: argparse.Namespace) -> int:
         heat = f"; heated by {', '.join(nd['heated_by'])}" if nd["heated_by"] else ""
         _say(args, f"  {nd['name']:<20} sensor {nd['sensor']}, time constant {nd['tau_s']:.0f} s "
                    f"(first-order fit {nd['tau_fit_s']:.0f} s){heat}{others}")
+    if s["copies"]:
+        _say(args, "second sensors on a part (lagged copies of a node's sensor, not nodes): " + ", ".join(
+            f"{c['column']} ~ {c['of']} (lag {c['tau_s']:.0f} s)" for c in s["copies"]))
     for a in s["axes"]:
         _say(args, f"{a['axis']}: training RMS {a['train_rmse_um']:.3f} µm, "
                    f"held-out RMS {a['holdout_rmse_um']:.3f} µm (last {s['holdout_rows']} rows; "

@@ -502,7 +502,7 @@ def make_shop_case(
     noise_um: float = 0.3,
 ) -> Case:
     """A run shaped like a real measured one: ``hours`` at ``dt`` s (46 h at 15 s = 11 041 rows),
-    sixteen temperatures ``T_t1..T_t16`` (the room is ``T_t6``, not marked; nine are second
+    sixteen temperatures ``T_t1..T_t16`` (the room is ``T_t6``, not marked; eight are second
     sensors on the same parts, each behind a small first-order lag of its own), the spindle stepped
     through 0–5000 rpm every 4 h, the shop air swinging ±1.8 K over a day, and five probe channels
     ``E_ch1..E_ch5``, each with its own drift map over the true VMC's nodes.

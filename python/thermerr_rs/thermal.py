@@ -63,12 +63,16 @@ class Machine:
         """Identify a starting network from a run alone (docs/machine-model.md, "Starting from
         data"): pick the ambient, group the other sensors into nodes by fuzzy c-means, place the
         sources, link the nodes by response order, set values from each node's time constant and
-        calibrate on the first ``train_fraction`` of the run.
+        calibrate on the first ``train_fraction`` of the run. A temperature that a first-order lag
+        (at most 30 min) of another one reproduces within 3 noise levels is a second sensor on
+        that part: a member of its node, not a node.
 
         ``axes``: the error columns to map (default every ``E_*`` column). Returns the machine
         and a summary: ``ambient`` (``column``, ``rule``, ``reason``), ``nodes`` (each with
         ``sensor``, ``members``, ``tau_fit_s``, ``tau_s``, ``heated_by``), ``axes`` (each with
-        ``train_rmse_um`` and ``holdout_rmse_um``), ``links``, ``sources``, ``node_rule`` and
+        ``train_rmse_um`` and ``holdout_rmse_um``), ``copies`` (second sensors on a part: each
+        ``column``, the node's sensor ``of``, ``tau_s``, ``gain``, ``noise_ratio``), ``spare``,
+        ``links``, ``sources``, ``node_rule`` and
         ``toml``, the file with a comment on every choice (what ``thermerr init`` writes).
         Bad input (no ``T_*`` column, no ``E_*`` axis, an unknown ``ambient``, more ``nodes``
         than sensors) raises a :class:`~thermerr_rs.errors.DataError` naming the run and the entry.

@@ -386,8 +386,11 @@ pub fn mates(
 }
 
 /// The node sensor of `m` whose rise over the first `rows` training rows `col` follows at
-/// r ≥ [`MATE_R`]: `col` is then another sensor on a part the network already has, not a heat
-/// source outside it (an unmodelled source there would only be that part read twice).
+/// r ≥ [`MATE_R`], or of which `col` is a lagged copy (identification's rule,
+/// [`is_lagged_copy`](crate::thermal::identify::is_lagged_copy)): `col` is then another sensor
+/// on a part the network already has, not a heat source outside it (an unmodelled source there
+/// would only be that part read twice). A copy a few minutes behind a fast part (the spindle
+/// motor) falls below r = 0.99 while still reading that part.
 pub fn node_sensor_mate(
     m: &Machine,
     train: &RunView<'_>,
@@ -395,10 +398,26 @@ pub fn node_sensor_mate(
     col: &str,
 ) -> Option<String> {
     let rx = rise_of(train, rows, col)?;
+    let n = rx.len();
+    let amb: Vec<f64> = match &m.ambient {
+        Ambient::Column(c) => train.col(c).ok()?[..n].to_vec(),
+        Ambient::Constant(v) => vec![*v; n],
+    };
+    let x = train.col(col).ok()?;
     m.nodes
         .iter()
         .filter_map(|nd| nd.sensor.as_deref())
-        .find(|s| follows(&rx, train, s))
+        .find(|s| {
+            follows(&rx, train, s)
+                || train.col(s).is_ok_and(|a| {
+                    crate::thermal::identify::is_lagged_copy(
+                        &train.time[..n],
+                        &a[..n],
+                        &x[..n],
+                        &amb,
+                    )
+                })
+        })
         .map(str::to_string)
 }
 
