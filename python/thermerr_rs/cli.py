@@ -385,7 +385,7 @@ def cmd_init(args: argparse.Namespace) -> int:
     _say(args, f"ambient: {amb['column']} ({amb['reason']})")
     _say(args, f"nodes: {s['node_rule']}")
     for nd in s["nodes"]:
-        others = f"; also in its cluster: {', '.join(nd['members'][1:])}" if len(nd["members"]) > 1 else ""
+        others = f"; its other sensors (not in the model): {', '.join(nd['members'][1:])}" if len(nd["members"]) > 1 else ""
         heat = f"; heated by {', '.join(nd['heated_by'])}" if nd["heated_by"] else ""
         _say(args, f"  {nd['name']:<20} sensor {nd['sensor']}, time constant {nd['tau_s']:.0f} s "
                    f"(first-order fit {nd['tau_fit_s']:.0f} s){heat}{others}")
