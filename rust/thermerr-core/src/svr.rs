@@ -812,6 +812,187 @@ fn scan_i(g: &[f64], y: &[f64], up: &[bool], off: usize) -> (f64, usize) {
     (gmax, idx)
 }
 
+/// The gradient update G_t += Q_it Δα_i + Q_jt Δα_j over a slice starting at variable `off`,
+/// and [`scan_i`] of the updated slice in the same pass (lanes, as [`Pass2::run`]).
+#[cfg(feature = "fit")]
+#[allow(clippy::too_many_arguments)]
+fn update_scan(
+    g: &mut [f64],
+    qi: &[f32],
+    qj: &[f32],
+    dai: f64,
+    daj: f64,
+    y: &[f64],
+    up: &[bool],
+    off: usize,
+) -> (f64, usize) {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, checked just above
+        return unsafe { update_scan_avx2(g, qi, qj, dai, daj, y, up, off) };
+    }
+    update_scan_lanes(g, qi, qj, dai, daj, y, up, off)
+}
+
+/// [`update_scan_lanes`] in AVX2 intrinsics: the same operations in the same order on four
+/// variables at a time, then the scalar loop's lanes for the rest.
+#[cfg(all(feature = "fit", target_arch = "x86_64"))]
+#[target_feature(enable = "avx2")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn update_scan_avx2(
+    g: &mut [f64],
+    qi: &[f32],
+    qj: &[f32],
+    dai: f64,
+    daj: f64,
+    y: &[f64],
+    up: &[bool],
+    off: usize,
+) -> (f64, usize) {
+    use std::arch::x86_64::*;
+    let n = g.len();
+    assert!(qi.len() >= n && qj.len() >= n && y.len() >= n && up.len() >= n);
+    let full = n - n % LANES;
+    let (vdi, vdj, vnan, sign) = (
+        _mm256_set1_pd(dai),
+        _mm256_set1_pd(daj),
+        _mm256_set1_pd(f64::NAN),
+        _mm256_set1_pd(-0.0),
+    );
+    let mut mx = _mm256_set1_pd(f64::NEG_INFINITY);
+    let mut ix = _mm256_set1_pd(-1.0);
+    let mut at = _mm256_setr_pd(
+        off as f64,
+        (off + 1) as f64,
+        (off + 2) as f64,
+        (off + 3) as f64,
+    );
+    let step = _mm256_set1_pd(LANES as f64);
+    let mut t = 0;
+    while t < full {
+        // SAFETY: t + 4 <= full <= n <= the length of every slice (asserted above)
+        let (g4, qi4, qj4, y4, um) = unsafe {
+            let bytes = std::ptr::read_unaligned(up.as_ptr().add(t) as *const u32);
+            (
+                _mm256_loadu_pd(g.as_ptr().add(t)),
+                _mm256_cvtps_pd(_mm_loadu_ps(qi.as_ptr().add(t))),
+                _mm256_cvtps_pd(_mm_loadu_ps(qj.as_ptr().add(t))),
+                _mm256_loadu_pd(y.as_ptr().add(t)),
+                _mm256_castsi256_pd(_mm256_cmpgt_epi64(
+                    _mm256_cvtepu8_epi64(_mm_cvtsi32_si128(bytes as i32)),
+                    _mm256_setzero_si256(),
+                )),
+            )
+        };
+        let gt = _mm256_add_pd(
+            g4,
+            _mm256_add_pd(_mm256_mul_pd(qi4, vdi), _mm256_mul_pd(qj4, vdj)),
+        );
+        // SAFETY: as above
+        unsafe { _mm256_storeu_pd(g.as_mut_ptr().add(t), gt) };
+        let v = _mm256_blendv_pd(vnan, _mm256_mul_pd(_mm256_xor_pd(y4, sign), gt), um);
+        let take = _mm256_cmp_pd::<_CMP_GE_OQ>(v, mx);
+        mx = _mm256_blendv_pd(mx, v, take);
+        ix = _mm256_blendv_pd(ix, at, take);
+        at = _mm256_add_pd(at, step);
+        t += LANES;
+    }
+    let (mut m4, mut i4) = ([0.0f64; LANES], [0.0f64; LANES]);
+    // SAFETY: each array holds four doubles
+    unsafe {
+        _mm256_storeu_pd(m4.as_mut_ptr(), mx);
+        _mm256_storeu_pd(i4.as_mut_ptr(), ix);
+    }
+    let mut lanes = ScanLanes {
+        mx: m4,
+        ix: i4.map(|v| if v < 0.0 { usize::MAX } else { v as usize }),
+    };
+    lanes.update(
+        &mut g[full..],
+        &qi[full..n],
+        &qj[full..n],
+        dai,
+        daj,
+        &y[full..n],
+        &up[full..n],
+        off + full,
+    );
+    lanes.join()
+}
+
+/// Per-lane state of the first selection pass: each lane's largest −y_t G_t over I_up with
+/// the last index reaching it.
+#[cfg(feature = "fit")]
+struct ScanLanes {
+    mx: [f64; LANES],
+    ix: [usize; LANES],
+}
+
+#[cfg(feature = "fit")]
+impl ScanLanes {
+    /// Updates G over a slice starting at variable `off` and scans it into lane (t mod LANES).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn update(
+        &mut self,
+        g: &mut [f64],
+        qi: &[f32],
+        qj: &[f32],
+        dai: f64,
+        daj: f64,
+        y: &[f64],
+        up: &[bool],
+        off: usize,
+    ) {
+        let n = g.len();
+        let (qi, qj, y, up) = (&qi[..n], &qj[..n], &y[..n], &up[..n]);
+        for t in 0..n {
+            let k = (off + t) % LANES;
+            let gt = g[t] + (qi[t] as f64 * dai + qj[t] as f64 * daj);
+            g[t] = gt;
+            // −y·G with y = ±1 is exactly LIBSVM's −G or G
+            let v = if up[t] { -y[t] * gt } else { f64::NAN };
+            if v >= self.mx[k] {
+                self.mx[k] = v;
+                self.ix[k] = off + t;
+            }
+        }
+    }
+
+    /// The largest value and, among the lanes reaching it, the largest index: LIBSVM's
+    /// sequential `>=` result.
+    fn join(&self) -> (f64, usize) {
+        let best = self.mx.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let idx = (0..LANES)
+            .filter(|&k| self.ix[k] != usize::MAX && self.mx[k] == best)
+            .map(|k| self.ix[k])
+            .max()
+            .unwrap_or(usize::MAX);
+        (best, idx)
+    }
+}
+
+/// The portable [`update_scan`]: one pass through [`ScanLanes`].
+#[cfg(feature = "fit")]
+#[allow(clippy::too_many_arguments)]
+fn update_scan_lanes(
+    g: &mut [f64],
+    qi: &[f32],
+    qj: &[f32],
+    dai: f64,
+    daj: f64,
+    y: &[f64],
+    up: &[bool],
+    off: usize,
+) -> (f64, usize) {
+    let mut lanes = ScanLanes {
+        mx: [f64::NEG_INFINITY; LANES],
+        ix: [usize::MAX; LANES],
+    };
+    lanes.update(g, qi, qj, dai, daj, y, up, off);
+    lanes.join()
+}
+
 #[cfg(feature = "fit")]
 fn join_i(l: (f64, usize), r: (f64, usize)) -> (f64, usize) {
     if r.1 != usize::MAX && r.0 >= l.0 {
@@ -864,38 +1045,176 @@ impl Pass2Out {
     }
 }
 
+/// Lanes of the branch-free selection loops: independent running minima (maxima) that the
+/// compiler keeps in vector registers, joined at the end with LIBSVM's tie rule.
+#[cfg(feature = "fit")]
+const LANES: usize = 4;
+
 #[cfg(feature = "fit")]
 impl Pass2<'_> {
     fn run(&self, lo: usize, hi: usize) -> Pass2Out {
-        let mut out = Pass2Out::none();
-        let (gmax, yi, qdi) = (self.gmax, self.yi, self.qdi);
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above
+            return unsafe { self.run_avx2(lo, hi) };
+        }
+        self.run_lanes(lo, hi)
+    }
+
+    /// [`run_lanes`](Self::run_lanes) in AVX2 intrinsics: the same operations in the same
+    /// order on four variables at a time, so the same values and the same selection (the
+    /// scalar loop vectorised poorly: two lanes, indices kept in general registers).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn run_avx2(&self, lo: usize, hi: usize) -> Pass2Out {
+        use std::arch::x86_64::*;
         let (g, y, low) = (&self.g[lo..hi], &self.y[lo..hi], &self.low[lo..hi]);
         let (qd, qi) = (&self.qd[lo..hi], &self.qi[lo..hi]);
-        for (t, ((((&gj, &yj), &ok), &qdj), &qij)) in
-            g.iter().zip(y).zip(low).zip(qd).zip(qi).enumerate()
-        {
-            if !ok {
-                continue;
-            }
+        let n = g.len();
+        assert!(y.len() == n && low.len() == n && qd.len() == n && qi.len() == n);
+        let full = n - n % LANES;
+        let c = -2.0 * self.yi;
+        let (vgmax, vqdi, vc) = (
+            _mm256_set1_pd(self.gmax),
+            _mm256_set1_pd(self.qdi),
+            _mm256_set1_pd(c),
+        );
+        let (vtau, vnan, vninf, vzero) = (
+            _mm256_set1_pd(TAU),
+            _mm256_set1_pd(f64::NAN),
+            _mm256_set1_pd(f64::NEG_INFINITY),
+            _mm256_setzero_pd(),
+        );
+        let sign = _mm256_set1_pd(-0.0);
+        let mut mn = _mm256_set1_pd(f64::INFINITY);
+        let mut ix = _mm256_set1_pd(-1.0);
+        let mut mx = vninf;
+        let mut at = _mm256_setr_pd(lo as f64, (lo + 1) as f64, (lo + 2) as f64, (lo + 3) as f64);
+        let step = _mm256_set1_pd(LANES as f64);
+        let mut j = 0;
+        while j < full {
+            // SAFETY: j + 4 <= full <= n, the length of every slice (asserted above)
+            let (g4, y4, qd4, qi4, lm) = unsafe {
+                let bytes = std::ptr::read_unaligned(low.as_ptr().add(j) as *const u32);
+                (
+                    _mm256_loadu_pd(g.as_ptr().add(j)),
+                    _mm256_loadu_pd(y.as_ptr().add(j)),
+                    _mm256_loadu_pd(qd.as_ptr().add(j)),
+                    _mm256_cvtps_pd(_mm_loadu_ps(qi.as_ptr().add(j))),
+                    _mm256_castsi256_pd(_mm256_cmpgt_epi64(
+                        _mm256_cvtepu8_epi64(_mm_cvtsi32_si128(bytes as i32)),
+                        _mm256_setzero_si256(),
+                    )),
+                )
+            };
+            let v = _mm256_mul_pd(y4, g4);
+            let gd = _mm256_add_pd(vgmax, v);
+            let quad = _mm256_add_pd(
+                _mm256_add_pd(vqdi, qd4),
+                _mm256_mul_pd(_mm256_mul_pd(vc, y4), qi4),
+            );
+            let q = _mm256_blendv_pd(vtau, quad, _mm256_cmp_pd::<_CMP_GT_OQ>(quad, vzero));
+            let o = _mm256_div_pd(_mm256_xor_pd(_mm256_mul_pd(gd, gd), sign), q);
+            let valid = _mm256_and_pd(lm, _mm256_cmp_pd::<_CMP_GT_OQ>(gd, vzero));
+            let obj = _mm256_blendv_pd(vnan, o, valid);
+            let take = _mm256_cmp_pd::<_CMP_LE_OQ>(obj, mn);
+            mn = _mm256_blendv_pd(mn, obj, take);
+            ix = _mm256_blendv_pd(ix, at, take);
+            let vv = _mm256_blendv_pd(vninf, v, lm);
+            mx = _mm256_blendv_pd(mx, vv, _mm256_cmp_pd::<_CMP_GE_OQ>(vv, mx));
+            at = _mm256_add_pd(at, step);
+            j += LANES;
+        }
+        let (mut m4, mut i4, mut x4) = ([0.0f64; LANES], [0.0f64; LANES], [0.0f64; LANES]);
+        // SAFETY: each array holds four doubles
+        unsafe {
+            _mm256_storeu_pd(m4.as_mut_ptr(), mn);
+            _mm256_storeu_pd(i4.as_mut_ptr(), ix);
+            _mm256_storeu_pd(x4.as_mut_ptr(), mx);
+        }
+        let mut lanes = Pass2Lanes {
+            mn: m4,
+            ix: i4.map(|v| if v < 0.0 { usize::MAX } else { v as usize }),
+            mx: x4,
+        };
+        self.tail(full, n, lo, &mut lanes);
+        lanes.join()
+    }
+
+    /// The loop without branches: a variable outside I_low (or with G_i + y_j G_j <= 0) gives
+    /// NaN, which no comparison takes. Each lane keeps its minimum of the objective with the
+    /// last index reaching it, and its maximum of y_j G_j; the join takes the smallest minimum
+    /// and, among the lanes that reach it, the largest index: the same (last) index LIBSVM's
+    /// sequential `<=` ends on. Every value is formed by the same operations as LIBSVM's.
+    #[inline(always)]
+    fn run_lanes(&self, lo: usize, hi: usize) -> Pass2Out {
+        let n = hi - lo;
+        let mut lanes = Pass2Lanes {
+            mn: [f64::INFINITY; LANES],
+            ix: [usize::MAX; LANES],
+            mx: [f64::NEG_INFINITY; LANES],
+        };
+        self.tail(0, n, lo, &mut lanes);
+        lanes.join()
+    }
+
+    /// Variables `from..n` of the range starting at `lo`, into lane (t mod LANES).
+    #[inline(always)]
+    fn tail(&self, from: usize, n: usize, lo: usize, lanes: &mut Pass2Lanes) {
+        let (gmax, yi, qdi) = (self.gmax, self.yi, self.qdi);
+        let (g, y, low) = (
+            &self.g[lo..lo + n],
+            &self.y[lo..lo + n],
+            &self.low[lo..lo + n],
+        );
+        let (qd, qi) = (&self.qd[lo..lo + n], &self.qi[lo..lo + n]);
+        for j in from..n {
+            let k = j % LANES;
+            let ok = low[j];
             // y_j·G_j is LIBSVM's G_j (y = +1) or −G_j (y = −1), exactly
-            let v = yj * gj;
+            let v = y[j] * g[j];
             let grad_diff = gmax + v;
-            if v >= out.gmax2 {
-                out.gmax2 = v;
+            // −2·y_i·y_j ∈ {±2}: the same rounding as LIBSVM's QD_i + QD_j ∓ 2·y_i·Q_ij
+            let quad = qdi + qd[j] + (-2.0 * yi * y[j]) * qi[j] as f64;
+            let q = if quad > 0.0 { quad } else { TAU };
+            let o = -(grad_diff * grad_diff) / q;
+            let obj = if ok && grad_diff > 0.0 { o } else { f64::NAN };
+            let vv = if ok { v } else { f64::NEG_INFINITY };
+            if obj <= lanes.mn[k] {
+                lanes.mn[k] = obj;
+                lanes.ix[k] = lo + j;
             }
-            if grad_diff > 0.0 {
-                // −2·y_i·y_j ∈ {±2}: the same rounding as LIBSVM's QD_i + QD_j ∓ 2·y_i·Q_ij
-                let quad = qdi + qdj + (-2.0 * yi * yj) * qij as f64;
-                let obj_diff = if quad > 0.0 {
-                    -(grad_diff * grad_diff) / quad
-                } else {
-                    -(grad_diff * grad_diff) / TAU
-                };
-                if obj_diff <= out.obj_min {
-                    out.idx = lo + t;
-                    out.obj_min = obj_diff;
-                }
+            if vv >= lanes.mx[k] {
+                lanes.mx[k] = vv;
             }
+        }
+    }
+}
+
+/// Per-lane state of the second selection pass: each lane's smallest objective with the last
+/// index reaching it (NaN, a non-candidate, is never taken) and its largest y_j·G_j over I_low.
+#[cfg(feature = "fit")]
+struct Pass2Lanes {
+    mn: [f64; LANES],
+    ix: [usize; LANES],
+    mx: [f64; LANES],
+}
+
+#[cfg(feature = "fit")]
+impl Pass2Lanes {
+    /// The smallest minimum and, among the lanes reaching it, the largest index: the same
+    /// (last) index LIBSVM's sequential `<=` ends on.
+    fn join(&self) -> Pass2Out {
+        let obj_min = self.mn.iter().copied().fold(f64::INFINITY, f64::min);
+        let mut out = Pass2Out::none();
+        out.gmax2 = self.mx.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if obj_min < f64::INFINITY {
+            out.obj_min = obj_min;
+            out.idx = (0..LANES)
+                .filter(|&k| self.ix[k] != usize::MAX && self.mn[k] == obj_min)
+                .map(|k| self.ix[k])
+                .max()
+                .expect("a lane reaches the minimum");
         }
         out
     }
@@ -1259,12 +1578,17 @@ impl Solver<'_, '_> {
             let (qi, qj) = (&self.qi[..a], &self.qj[..a]);
             let (y, up) = (&self.yf[..a], &self.up[..a]);
             let step = |g: &mut [f64], off: usize| {
-                let n = g.len();
-                let sl = off..off + n;
-                for ((g, a), b) in g.iter_mut().zip(&qi[sl.clone()]).zip(&qj[sl.clone()]) {
-                    *g += *a as f64 * dai + *b as f64 * daj;
-                }
-                scan_i(g, &y[sl.clone()], &up[sl], off)
+                let sl = off..off + g.len();
+                update_scan(
+                    g,
+                    &qi[sl.clone()],
+                    &qj[sl.clone()],
+                    dai,
+                    daj,
+                    &y[sl.clone()],
+                    &up[sl],
+                    off,
+                )
             };
             if a >= PAR_MIN {
                 use rayon::prelude::*;
@@ -1590,5 +1914,113 @@ mod tests {
         let m = SvrParams::new().check().unwrap().fit(s, &y).unwrap();
         let back: SvrModel = serde_json::from_str(&serde_json::to_string(&m).unwrap()).unwrap();
         assert_eq!(m, back);
+    }
+}
+
+#[cfg(all(test, feature = "fit"))]
+mod lane_tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// G, y, the I_low (or I_up) mask, QD and Q_i of one random selection case.
+    type Case = (Vec<f64>, Vec<f64>, Vec<bool>, Vec<f64>, Vec<f32>);
+
+    /// Random selection inputs with ties, ±0, empty sets and every length mod LANES.
+    fn case(rng: &mut rand_chacha::ChaCha8Rng, n: usize) -> Case {
+        let pick = |rng: &mut rand_chacha::ChaCha8Rng| -> f64 {
+            match rng.random_range(0..6) {
+                0 => 0.0,
+                1 => -0.0,
+                2 => 0.5,
+                _ => rng.random_range(-2.0..2.0),
+            }
+        };
+        let g = (0..n).map(|_| pick(rng)).collect();
+        let y = (0..n)
+            .map(|_| if rng.random_bool(0.5) { 1.0 } else { -1.0 })
+            .collect();
+        let mask = (0..n).map(|_| rng.random_bool(0.7)).collect();
+        let qd = (0..n).map(|_| rng.random_range(0.5..1.5)).collect();
+        let qi = (0..n).map(|_| rng.random_range(-1.0f32..1.0)).collect();
+        (g, y, mask, qd, qi)
+    }
+
+    /// LIBSVM's sequential loops, as they were before the lanes.
+    fn sequential_pass2(p: &Pass2<'_>) -> (f64, usize, f64) {
+        let (mut obj_min, mut idx, mut gmax2) = (f64::INFINITY, usize::MAX, f64::NEG_INFINITY);
+        for j in 0..p.g.len() {
+            if !p.low[j] {
+                continue;
+            }
+            let v = p.y[j] * p.g[j];
+            let gd = p.gmax + v;
+            if v >= gmax2 {
+                gmax2 = v;
+            }
+            if gd > 0.0 {
+                let quad = p.qdi + p.qd[j] + (-2.0 * p.yi * p.y[j]) * p.qi[j] as f64;
+                let o = if quad > 0.0 {
+                    -(gd * gd) / quad
+                } else {
+                    -(gd * gd) / TAU
+                };
+                if o <= obj_min {
+                    idx = j;
+                    obj_min = o;
+                }
+            }
+        }
+        (obj_min, idx, gmax2)
+    }
+
+    #[test]
+    fn lanes_select_what_the_sequential_loops_select() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for n in 0..70 {
+            for _ in 0..20 {
+                let (g, y, low, qd, qi) = case(&mut rng, n);
+                let p = Pass2 {
+                    g: &g,
+                    y: &y,
+                    low: &low,
+                    qd: &qd,
+                    qi: &qi,
+                    yi: 1.0,
+                    qdi: 1.0,
+                    gmax: 0.3,
+                };
+                let want = sequential_pass2(&p);
+                for got in [p.run_lanes(0, n), p.run(0, n)] {
+                    assert_eq!(
+                        (got.obj_min.to_bits(), got.idx),
+                        (want.0.to_bits(), want.1),
+                        "n = {n}"
+                    );
+                    assert_eq!(got.gmax2, want.2, "n = {n}");
+                }
+                // the first pass, with the update
+                let (dai, daj) = (rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0));
+                let qj: Vec<f32> = qi.iter().rev().copied().collect();
+                let mut g_seq = g.clone();
+                for t in 0..n {
+                    g_seq[t] += qi[t] as f64 * dai + qj[t] as f64 * daj;
+                }
+                let want = scan_i(&g_seq, &y, &low, 3);
+                let (mut g1, mut g2) = (g.clone(), g.clone());
+                let a = update_scan_lanes(&mut g1, &qi, &qj, dai, daj, &y, &low, 3);
+                let b = update_scan(&mut g2, &qi, &qj, dai, daj, &y, &low, 3);
+                for (got, gg) in [(a, &g1), (b, &g2)] {
+                    assert_eq!(
+                        (got.0.to_bits(), got.1),
+                        (want.0.to_bits(), want.1),
+                        "n = {n}"
+                    );
+                    assert!(gg
+                        .iter()
+                        .zip(&g_seq)
+                        .all(|(a, b)| a.to_bits() == b.to_bits()));
+                }
+            }
+        }
     }
 }
