@@ -357,6 +357,9 @@ pub fn mates(
     let mut mean = vec![0.0; n];
     // in name order, so that the mean is summed the same way on every call
     for c in free_columns(m, train) {
+        // r >= MATE_R only, not a lagged copy: the difference's trend below compares raw
+        // readings, and a copy's smaller rise (gain 0.8) and lag have trends of their own (a
+        // real 0.04 K/h drift on the shop run's T_t1 read -0.048 K/h against its two copies)
         if c == col || !follows(&rx, train, &c) {
             continue;
         }
@@ -385,12 +388,9 @@ pub fn mates(
     })
 }
 
-/// The node sensor of `m` whose rise over the first `rows` training rows `col` follows at
-/// r ≥ [`MATE_R`], or of which `col` is a lagged copy (identification's rule,
-/// [`is_lagged_copy`](crate::thermal::identify::is_lagged_copy)): `col` is then another sensor
-/// on a part the network already has, not a heat source outside it (an unmodelled source there
-/// would only be that part read twice). A copy a few minutes behind a fast part (the spindle
-/// motor) falls below r = 0.99 while still reading that part.
+/// The node sensor of `m` on whose part `col` sits ([`same_part`]): `col` is then another
+/// sensor on a part the network already has, not a heat source outside it (an unmodelled source
+/// there would only be that part read twice).
 pub fn node_sensor_mate(
     m: &Machine,
     train: &RunView<'_>,
@@ -398,27 +398,35 @@ pub fn node_sensor_mate(
     col: &str,
 ) -> Option<String> {
     let rx = rise_of(train, rows, col)?;
-    let n = rx.len();
-    let amb: Vec<f64> = match &m.ambient {
-        Ambient::Column(c) => train.col(c).ok()?[..n].to_vec(),
-        Ambient::Constant(v) => vec![*v; n],
-    };
-    let x = train.col(col).ok()?;
     m.nodes
         .iter()
         .filter_map(|nd| nd.sensor.as_deref())
-        .find(|s| {
-            follows(&rx, train, s)
-                || train.col(s).is_ok_and(|a| {
-                    crate::thermal::identify::is_lagged_copy(
-                        &train.time[..n],
-                        &a[..n],
-                        &x[..n],
-                        &amb,
-                    )
-                })
-        })
+        .find(|s| same_part(m, train, &rx, col, s))
         .map(str::to_string)
+}
+
+/// Whether column `other` reads the same part as `col` (whose [`rise_of`] is `rx`): its rise
+/// follows at Pearson r ≥ [`MATE_R`], or one is a lagged copy of the other by identification's
+/// rule ([`is_lagged_copy`](crate::thermal::identify::is_lagged_copy)). A second sensor a few
+/// minutes behind a fast part (the spindle motor) falls below r = 0.99 while reading that part.
+fn same_part(m: &Machine, train: &RunView<'_>, rx: &[f64], col: &str, other: &str) -> bool {
+    if follows(rx, train, other) {
+        return true;
+    }
+    let n = rx.len();
+    let (Ok(a), Ok(b)) = (train.col(col), train.col(other)) else {
+        return false;
+    };
+    let amb: Vec<f64> = match &m.ambient {
+        Ambient::Column(c) => match train.col(c) {
+            Ok(v) => v[..n].to_vec(),
+            Err(_) => return false,
+        },
+        Ambient::Constant(v) => vec![*v; n],
+    };
+    let t = &train.time[..n];
+    use crate::thermal::identify::is_lagged_copy;
+    is_lagged_copy(t, &a[..n], &b[..n], &amb) || is_lagged_copy(t, &b[..n], &a[..n], &amb)
 }
 
 /// A column's rise since its first reading over the first `rows` rows; `None` for a column the
