@@ -102,6 +102,26 @@ def test_distinct_parts_are_not_lagged_copies(topology):
         assert s["copies"] == [], (seed, s["copies"])
 
 
+def test_a_duplicate_a_dead_sensor_and_a_second_room_reading_make_no_node():
+    """A column logged twice is a lagged copy at lag 0; a constant (a dead sensor) and a second
+    reading of the room vary by less than 2 noise levels (the reading, or its rise over the
+    ambient) and are left out. Before, the duplicate and the constant each became a node and a
+    network of only duplicated sensors held out 45 µm."""
+    c = syn.make_case("vmc", "none", 1, hours=HOURS, dt=DT_S)
+    plain, s0 = Machine.identify(_run(c.train, "plain.csv"))
+    cols = dict(c.train)
+    cols["T_dup"] = cols["T_front_bearing"].copy()
+    cols["T_flat"] = np.full(len(cols["time_s"]), 21.5)
+    cols["T_room2"] = cols["T_ambient"] + 0.03 * np.random.default_rng(0).normal(size=len(cols["time_s"]))
+    m, s = Machine.identify(_run(cols, "extra.csv"))
+    assert m.sensors == plain.sensors
+    assert [(x["column"], x["of"], x["tau_s"]) for x in s["copies"]] == [("T_dup", "T_front_bearing", 0.0)]
+    left = {x.split(":")[0]: x for x in s["spare"]}
+    assert "reading varies by 0.000 K" in left["T_flat"]
+    assert "rise over the ambient varies" in left["T_room2"]
+    assert s["axes"][0]["holdout_rmse_um"] == pytest.approx(s0["axes"][0]["holdout_rmse_um"], rel=1e-9)
+
+
 def test_more_nodes_asked_than_parts_keeps_the_copies_as_nodes():
     c = syn.make_shop_case(2, hours=12.0, hidden={})
     run = _run(c.train, "shop.csv")

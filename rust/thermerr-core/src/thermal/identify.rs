@@ -76,6 +76,15 @@ use crate::samples::Samples;
 /// the hydraulic unit at least 16.
 pub const SCREEN_RATIO: f64 = 12.0;
 
+/// A temperature whose reading, or whose rise over the ambient, varies by at most this many
+/// noise levels (RMS about its mean over the training rows) is left out: a constant (a dead
+/// sensor) or another reading of the room (its rise over the ambient is the two noises, about
+/// 1.4 noise levels). It would pass the screening (a constant is fitted exactly) and make a node
+/// of nothing. Machine sensors vary by 3.7 noise levels and more on the synthetic runs (the
+/// VMC and lathe of every cause, seeds 1-2, 8 h at 120 s and 20 h at 60 s, and the shop runs;
+/// the least is the lathe's bed on a short run).
+pub const FLAT_RATIO: f64 = 2.0;
+
 /// A temperature that a first-order lag of another one (and the ambient) reproduces to within
 /// this many of its noise levels is a second sensor on that part (a lagged copy), not a node of
 /// its own. Measured on the shop runs (`make_shop_case`, seeds 1-5, 46 h at 15 s): the nine
@@ -392,8 +401,8 @@ fn copy_fit(z: &[f64], b: &[f64], amb: &[f64]) -> (f64, f64) {
 }
 
 /// The best lag of `a` for `b` (τ in `COPY_TAU`): a log grid, then a golden-section search
-/// between the best point's neighbours when the grid's best is within twice [`COPY_RATIO`].
-/// Returns (RMS in units of `noise`, τ, gain).
+/// between the best point's neighbours when the grid's best is within twice [`COPY_RATIO`];
+/// τ = 0 (`b` a duplicate of `a`) is tried too. Returns (RMS in units of `noise`, τ, gain).
 fn best_copy_fit(
     t: &[f64],
     grid: &[f64],
@@ -408,6 +417,11 @@ fn best_copy_fit(
         .min_by(|&i, &j| fits[i].0.total_cmp(&fits[j].0))
         .unwrap_or(0);
     let mut best = (fits[k].0, grid[k], fits[k].1);
+    // no lag at all: a duplicate of the column (two sensors side by side, a column logged twice)
+    let same = copy_fit(a, b, amb);
+    if same.0 < best.0 {
+        return (same.0 / noise, 0.0, same.1);
+    }
     if best.0 <= 2.0 * COPY_RATIO * noise {
         let at = |tau: f64| {
             let (r, g) = copy_fit(&lag(t, a, tau), b, amb);
@@ -891,6 +905,24 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     for (s, c) in sensors.iter().enumerate() {
         let y = &rises[s];
         let noise = reading_noise(&view.col(c)?[..m]);
+        // a column that does not rise over the ambient beyond its noise carries nothing to
+        // build a node on: a dead sensor's constant, or a second reading of the room
+        let spread = |v: &[f64]| {
+            let mean = v.iter().sum::<f64>() / v.len() as f64;
+            rms(v.iter().map(|x| x - mean))
+        };
+        let (own, over) = (spread(&view.col(c)?[..m]), spread(y));
+        if own.min(over) <= FLAT_RATIO * noise {
+            let what = if own <= over {
+                format!("its reading varies by {own:.3} K RMS on the training rows")
+            } else {
+                format!("its rise over the ambient varies by {over:.3} K RMS on the training rows")
+            };
+            spare.push(format!(
+                "{c}: {what}, within {FLAT_RATIO}x its noise ({noise:.3} K): it does not follow the machine's heat (a constant, or another reading of the room), left out of the network (a spare column)"
+            ));
+            continue;
+        }
         let mut best = f64::INFINITY;
         for (a, &i) in coarse.iter().enumerate() {
             for &j in &coarse[a + 1..] {
