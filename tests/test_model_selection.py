@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 import thermerr_rs as tr
-from thermerr_rs.model_selection import candidates, edge_latency, select_model
+from thermerr_rs.errors import ParameterError
+from thermerr_rs.model_selection import Candidate, Entry, candidates, edge_latency, pick, select_model
 
 SENSORS = ["T_s01", "T_s07", "T_s10", "T_s13"]
 
@@ -17,7 +18,7 @@ SENSORS = ["T_s01", "T_s07", "T_s10", "T_s13"]
 def test_the_leaderboard_is_the_time_ordered_cv_of_each_candidate(example_run1):
     run = tr.read_run(example_run1)
     sel = select_model(run, "E_z", SENSORS, families=["mlr", "svr"], cv=4)
-    assert len(sel.leaderboard) == 3 + 9
+    assert len(sel.leaderboard) == 4 + 9
     rms = [e.cv_rms for e in sel.leaderboard]
     assert rms == sorted(rms)
     # recompute the MLR entry by hand on the same splits
@@ -44,7 +45,7 @@ def test_same_seed_same_board(example_run1):
 
 
 def test_history_doubles_the_candidates_and_is_refitted_with_the_winner(example_run1):
-    assert len(candidates(["mlr", "rbf", "svr"], [900.0])) == 2 * (3 + 9 + 9)
+    assert len(candidates(["mlr", "rbf", "svr"], [900.0])) == 2 * (4 + 9 + 9)
     run = tr.read_run(example_run1)
     sel = select_model(run, "E_z", SENSORS, families=["mlr"], history=[900.0, 3600.0], cv=3)
     best = sel.best.candidate
@@ -107,14 +108,21 @@ def test_cli_model_auto(example_run1, example_run2, tmp_path, capsys):
     report = json.loads(capsys.readouterr().out)
     board = report["selection"]["leaderboard"]
     # without --history, auto tries every candidate without and with AUTO_HISTORY (900 s, 1 h)
-    assert len(board) == 42 and report["model"] == board[0]["model"]
-    assert sum(e["history"] == [900.0, 3600.0] for e in board) == 21
-    assert json.loads(out.read_text())["kind"] == board[0]["family"]
+    win = board[report["selection"]["winner"]]
+    assert len(board) == 44 and report["model"] == win["model"] and report["selection"]["rule"] == "1se"
+    assert sum(e["history"] == [900.0, 3600.0] for e in board) == 22
+    assert json.loads(out.read_text())["kind"] == win["family"]
     # --history none: the candidates without
     assert main(["fit", str(example_run1), "--axis", "E_z", "--model", "auto", "--sensors", ",".join(SENSORS),
                  "--cv", "3", "--history", "none", "--out", str(out), "--json", "--no-fallbacks"]) == 0
     board = json.loads(capsys.readouterr().out)["selection"]["leaderboard"]
-    assert len(board) == 21 and all(e["history"] is None for e in board)
+    assert len(board) == 22 and all(e["history"] is None for e in board)
+    # --select min: the lowest CV RMS
+    assert main(["fit", str(example_run1), "--axis", "E_z", "--model", "auto", "--sensors", ",".join(SENSORS),
+                 "--cv", "3", "--history", "none", "--select", "min", "--out", str(out), "--json",
+                 "--no-fallbacks"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["selection"]["winner"] == 0 and report["model"] == report["selection"]["leaderboard"][0]["model"]
 
 
 def test_cli_model_auto_with_tune(example_run1, tmp_path, capsys):
@@ -125,7 +133,7 @@ def test_cli_model_auto_with_tune(example_run1, tmp_path, capsys):
                  "--cv", "3", "--tune", "pso", "--pop", "4", "--iters", "2", "--history", "none", "--out", str(out),
                  "--json", "--no-fallbacks"]) == 0
     board = json.loads(capsys.readouterr().out)["selection"]["leaderboard"]
-    assert len(board) == 22 and sum(e["tuned"] == ["pso", 4, 2] for e in board) == 1
+    assert len(board) == 23 and sum(e["tuned"] == ["pso", 4, 2] for e in board) == 1
 
 
 def test_cli_model_auto_draws_a_bar_on_a_terminal(example_run1, tmp_path, capsys, monkeypatch):
@@ -138,3 +146,48 @@ def test_cli_model_auto_draws_a_bar_on_a_terminal(example_run1, tmp_path, capsys
     err = capsys.readouterr().err
     assert "model selection" in err and "candidate" in err  # the tqdm bar, not a line per candidate
     assert "candidate 1/42" not in err
+
+
+def _entry(family: str, params: dict, cv: float, std: float) -> Entry:
+    return Entry(Candidate(family, params, None), cv, std, 0.0, 0.0)
+
+
+def test_the_one_standard_error_rule_takes_the_simplest_within_the_band() -> None:
+    # sorted by CV RMS as select_model sorts; 5 splits: the standard error is std / sqrt(4)
+    board = [
+        _entry("svr", {"C": 100.0, "gamma": 0.01}, 2.70, 1.96),  # lowest; band up to 2.70 + 0.98 = 3.68
+        _entry("mlr", {"alpha": 1.0}, 2.94, 1.88),
+        _entry("mlr", {"alpha": 10.0}, 3.19, 1.40),
+        _entry("rbf", {"n_centers": 10, "spread": 1.0}, 3.30, 1.00),
+        _entry("mlr", {"alpha": 100.0}, 3.69, 1.30),  # just outside the band
+    ]
+    assert pick(board, 5, "min") == 0
+    assert pick(board, 5, "1se") == 2  # MLR before the kernels, then the strongest ridge inside
+    # one split has no spread: the lowest
+    assert pick(board, 1, "1se") == 0
+    # a band holding no MLR: the lowest CV RMS among the kernel models in it
+    kernels = [_entry("svr", {}, 1.0, 0.2), _entry("rbf", {}, 1.05, 0.1), _entry("mlr", {}, 2.0, 0.1)]
+    assert pick(kernels, 5, "1se") == 0
+    # equal simplicity: the lower CV RMS
+    ties = [_entry("mlr", {"alpha": 10.0}, 1.0, 0.4), _entry("mlr", {"alpha": 10.0}, 1.1, 0.1)]
+    assert pick(ties, 5, "1se") == 0
+    with pytest.raises(ParameterError, match="rule must be one of 1se, min"):
+        pick(board, 5, "lowest")
+
+
+def test_select_model_reports_its_rule_and_winner(example_run1):
+    run = tr.read_run(example_run1)
+    a = select_model(run, "E_z", SENSORS, families=["mlr", "svr"], cv=4)
+    b = select_model(run, "E_z", SENSORS, families=["mlr", "svr"], cv=4, rule="min")
+    assert [e.cv_rms for e in a.leaderboard] == [e.cv_rms for e in b.leaderboard]
+    assert b.winner == 0 and b.best is b.leaderboard[0]
+    assert a.winner == pick(a.leaderboard, a.n_splits, "1se") and a.best is a.leaderboard[a.winner]
+    # the refitted model is the winner's
+    assert type(a.model).__name__.lower() == a.best.candidate.family
+    if a.best.candidate.family == "mlr":
+        assert a.model.alpha == a.best.candidate.params.get("alpha", 0.0)
+    d = a.to_dict()
+    assert d["rule"] == "1se" and d["winner"] == a.winner
+    assert "* " + a.best.candidate.label() in a.table()
+    with pytest.raises(ParameterError, match="rule must be one of"):
+        select_model(run, "E_z", SENSORS, families=["mlr"], rule="best")

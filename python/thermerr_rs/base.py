@@ -150,12 +150,21 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         self.input_history_ = hist
         return self
 
-    def predict_run(self, run: Any, *, shape: Any = None) -> F64:
+    def predict_run(self, run: Any, *, shape: Any = None, after: Any = None) -> F64:
         """Predict a run from the columns (and input form) the model was fitted on.
 
         ``shape`` (e.g. ``"limit=50,rate=2,unit=0.1"``): return the offsets a CNC would be sent
         instead of the raw predictions (:func:`thermerr_rs.shape_offsets`, the same code as
-        ``thermerr-edge --shape``)."""
+        ``thermerr-edge --shape``).
+
+        ``after`` (a :class:`~thermerr_rs.Run`): ``run`` continues that run (e.g. the test rows
+        cut from the log whose first rows trained the model): it is predicted as the end of
+        ``after`` followed by ``run`` (:meth:`Run.following`), so that rises are taken from
+        ``after``'s start, as the error itself is, and history filters run on through the join;
+        only ``run``'s rows are returned. Without it, rises start at ``run``'s first sample: right
+        for a run of its own (the probes zeroed at its start), wrong for a piece of a longer one."""
+        if after is not None:
+            return _continued(self.predict_run, run, after, shape)
         y = self._predict_columns(self._run_matrix(run))
         if shape is None:
             return y
@@ -315,6 +324,13 @@ def _jsonable(v: Any) -> Any:
     if isinstance(v, np.ndarray):
         return v.tolist()
     return v
+
+
+def _continued(predict: Any, run: Any, after: Any, shape: Any, **kw: Any) -> F64:
+    """``predict`` (a ``predict_run``) of ``run`` as the continuation of ``after``: the rows of
+    both as one run, ``run``'s returned (the one owner of ``predict_run(after=...)``)."""
+    y: F64 = predict(run.following(after), shape=shape, **kw)
+    return np.ascontiguousarray(y[len(after):])
 
 
 def _history(taus: Sequence[float] | None, time_s: F64) -> dict[str, Any] | None:

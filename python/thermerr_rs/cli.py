@@ -263,7 +263,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
             selection = select_model(run, args.axis, sensors, history=history, inputs=args.inputs,
                                      cv=args.cv, gap=args.gap, budget_s=args.budget, seed=args.seed,
                                      tune=args.tune, tune_pop=args.pop or 10, tune_iters=args.iters or 10,
-                                     progress=step)
+                                     rule=args.select, progress=step)
         finally:
             if bar is not None:
                 bar.close()
@@ -286,8 +286,17 @@ def cmd_fit(args: argparse.Namespace) -> int:
     _print_scores(args, "training run", train)
     if args.test:
         test_run = _read(args, args.test)
-        held = scores(test_run[args.axis], model.predict_run(test_run))
+        after = None
+        if args.test_continues or test_run.continues(run):
+            # a piece of the training run's log: its error is relative to that run's start
+            after = run
+            why = ("--test-continues" if args.test_continues else
+                   f"its clock starts {test_run.time_s[0] - run.time_s[-1]:g} s after the training run's last sample")
+            _say(args, f"{test_run.source} continues {run.source} ({why}): predicted from the training run's "
+                       "start, as a gateway running since then (rises and history go on through the join)")
+        held = scores(test_run[args.axis], model.predict_run(test_run, after=after))
         report["test"] = held.as_dict()
+        report["test_continues_training"] = after is not None
         _print_scores(args, f"held-out run {test_run.source}", held)
     if not args.no_guard:
         from .guard import add_guard
@@ -539,6 +548,9 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--model", choices=["mlr", "rbf", "svr", "greybp", "gm1n", "bp", "hybrid", "auto"], default="mlr",
                    help="family to fit, or 'auto': MLR, RBF and SVR candidates (with and without --history, 900,3600 unless given) scored "
                         "on --cv time-ordered splits of the run, the best refitted (default mlr)")
+    f.add_argument("--select", choices=["1se", "min"], default="1se",
+                   help="--model auto: the winner is the simplest candidate within one standard error of the "
+                        "lowest CV RMS (1se, default: MLR before RBF/SVR, then the strongest ridge) or the lowest (min)")
     f.add_argument("--budget", type=float, default=None, metavar="SECONDS",
                    help="--model auto: start no new candidate after this many seconds")
     f.add_argument("--sensors", default="all", help="'all' (default), 'auto' (fuzzy c-means selection) or T_a,T_b,...")
@@ -546,7 +558,7 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--seed", type=_nonneg_int, default=0, help="seed of every stochastic step (default 0)")
     f.add_argument("--alpha", type=_nonneg_float, default=0.0,
                    help="MLR: ridge penalty on the slopes, in the units of the centred inputs' sums of squares "
-                        "(default 0: least squares; --model auto tries 1 and 10)")
+                        "(default 0: least squares; --model auto tries 1, 10 and 100)")
     f.add_argument("--design", choices=["exact", "ols", "kmeans"], default="ols", help="RBF design (default ols)")
     f.add_argument("--spread", type=float, default=1.0, help="RBF spread on [0,1]-scaled inputs (default 1.0)")
     f.add_argument("--goal", type=float, default=None,
@@ -591,7 +603,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also read each sensor's rise over about the last TAU seconds (first-order filters), "
                         "e.g. 900,3600; kept as state on the edge. --model auto tries 900,3600 beside none "
                         "unless given ('none': no history)")
-    f.add_argument("--test", help="a held-out run to score the model on")
+    f.add_argument("--test", help="a held-out run to score the model on; a run whose time_s clock goes on from the "
+                                   "training run's (a later piece of the same log) is predicted as its continuation")
+    f.add_argument("--test-continues", action="store_true",
+                   help="--test is the continuation of the training run even if its clock does not say so "
+                        "(an ISO time column counts from its own first row): predict it from the training run's start")
     f.add_argument("--no-guard", action="store_true",
                    help="write no sensor-fault guard (default: limits learnt from the run and, for mlr/rbf/svr/bp, "
                         "one fallback model without each sensor, for thermerr-edge)")

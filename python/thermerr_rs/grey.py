@@ -9,7 +9,7 @@ import numpy as np
 
 from . import _core
 from ._arrays import F64, as_vector, feature_names
-from .base import Regressor, SequenceModel
+from .base import Regressor, SequenceModel, _continued
 from .errors import ModelFormatError
 
 
@@ -50,9 +50,11 @@ class _Sequential(SequenceModel):
         out: F64 = self._inner.predict(x, y)
         return out
 
-    def predict_run(self, run: Any, *, one_step: bool = False, shape: Any = None) -> F64:
+    def predict_run(self, run: Any, *, one_step: bool = False, shape: Any = None, after: Any = None) -> F64:
         """Predict a run closed loop, or one step ahead from its measured target column;
-        ``shape`` as in :meth:`Estimator.predict_run`."""
+        ``shape`` and ``after`` as in :meth:`Estimator.predict_run`."""
+        if after is not None:
+            return _continued(self.predict_run, run, after, shape, one_step=one_step)
         x = self._run_matrix(run)
         if one_step:
             if not self.target_name_:

@@ -15,6 +15,15 @@ sample through the library (a batch call, Python included; ``to_dict`` only). Th
 refitted with its rises and history, is then timed the edge's way from raw readings
 (``edge_latency_us``: median and 99th percentile per sample). The CV errors are deterministic for a seed (the times are measured). A
 budget in seconds stops starting new candidates once spent (the ones scored so far are ranked).
+
+The winner is chosen by the one-standard-error rule (``rule="1se"``, the default; Hastie,
+Tibshirani & Friedman, *The Elements of Statistical Learning*, §7.10, and glmnet's
+``lambda.1se``): among the candidates whose CV RMS is within one standard error of the lowest
+(the splits' sample standard deviation over √splits), the simplest: MLR before the kernel
+models, then the strongest ridge, then the lowest CV RMS. The splits of a run's training part
+test each model on a stretch it never saw (the first split trains on a sixth of it), so their
+mean differs between candidates by less than its own spread; the rule then takes the model that
+extrapolates most plainly. ``rule="min"`` takes the lowest CV RMS (the rule before 2026-11-25).
 """
 
 from __future__ import annotations
@@ -38,6 +47,10 @@ EDGE_SAMPLES = 1000
 
 #: families :func:`select_model` knows, in the order they are tried
 FAMILIES: tuple[str, ...] = ("mlr", "rbf", "svr")
+
+#: how :func:`select_model` picks its winner from the leaderboard: the one-standard-error rule
+#: (the default) or the lowest CV RMS
+RULES: tuple[str, ...] = ("1se", "min")
 
 #: the temperature history ``thermerr fit --model auto`` tries beside none when ``--history`` is
 #: not given: each reading's rise over about the last 15 min and 1 h (the time constants of a
@@ -80,14 +93,14 @@ class Candidate:
 
 def candidates(families: Sequence[str], history: Sequence[float] | None,
                tune: tuple[str, int, int] | None = None) -> list[Candidate]:
-    """The fixed grid: MLR, plain and with a ridge penalty α 1 and 10 (inputs in K: a long
+    """The fixed grid: MLR, plain and with a ridge penalty α 1, 10 and 100 (inputs in K: a long
     history of correlated readings fitted on a short early split extrapolates wildly without
     one); RBF k-means with 10/20/40 centres × spread 0.5/1/2 (in the inputs'
     units, K of rise); SVR with C 1/10/100 × gamma 0.01/0.1/'scale'; with ``tune`` (method, pop,
     iters) and the SVR family, one more SVR whose C and gamma the swarm searches. With
     ``history``, each again with those time constants."""
     grid: dict[str, list[dict[str, Any]]] = {
-        "mlr": [{}, {"alpha": 1.0}, {"alpha": 10.0}],
+        "mlr": [{}, {"alpha": 1.0}, {"alpha": 10.0}, {"alpha": 100.0}],
         "rbf": [{"n_centers": k, "spread": s} for k in (10, 20, 40) for s in (0.5, 1.0, 2.0)],
         "svr": [{"C": c, "gamma": g, "epsilon": 0.1} for c in (1.0, 10.0, 100.0) for g in (0.01, 0.1, "scale")],
     }
@@ -123,10 +136,34 @@ class Entry:
                 "edge_us_per_sample": self.edge_us, "predict_us_per_sample": self.predict_us}
 
 
+def simplicity(c: Candidate) -> tuple[int, float]:
+    """The order of the one-standard-error rule, simplest first: MLR before the kernel models
+    (RBF, SVR), then the stronger ridge."""
+    if c.family == "mlr":
+        return (0, -float(c.params.get("alpha", 0.0)))
+    return (1, 0.0)
+
+
+def pick(board: Sequence[Entry], n_splits: int, rule: str = "1se") -> int:
+    """The winner's index in ``board`` (sorted by CV RMS, lowest first) by ``rule``: ``"min"``,
+    the lowest CV RMS; ``"1se"``, the simplest candidate (:func:`simplicity`; ties by CV RMS)
+    whose CV RMS is at most the lowest plus its standard error, the splits' sample standard
+    deviation over √splits."""
+    if rule not in RULES:
+        raise ParameterError(f"rule must be one of {', '.join(RULES)}, got {rule!r}")
+    if rule == "min" or n_splits < 2:
+        return 0
+    best = board[0]
+    bar = best.cv_rms + best.cv_rms_std / np.sqrt(n_splits - 1)  # std (ddof 0) · √(k/(k-1)) / √k
+    within = [i for i, e in enumerate(board) if e.cv_rms <= bar]
+    return min(within, key=lambda i: (simplicity(board[i].candidate), board[i].cv_rms))
+
+
 @dataclass
 class ModelSelection:
-    """Result of :func:`select_model`: the ``leaderboard`` (best first), the winner refitted on
-    the whole run (``model``), the splits used, and candidates not scored within the budget."""
+    """Result of :func:`select_model`: the ``leaderboard`` (lowest CV RMS first), the winner
+    (``best``, ``leaderboard[winner]``, chosen by ``rule``) refitted on the whole run
+    (``model``), the splits used, and candidates not scored within the budget."""
 
     leaderboard: list[Entry]
     model: Estimator
@@ -135,15 +172,18 @@ class ModelSelection:
     skipped: list[str] = field(default_factory=list)
     #: the winner's per-sample latency on the edge, µs: (median, 99th percentile)
     edge_latency_us: tuple[float, float] | None = None
+    #: the winner's index in the leaderboard, and the rule that chose it (:data:`RULES`)
+    winner: int = 0
+    rule: str = "min"
 
     @property
     def best(self) -> Entry:
-        return self.leaderboard[0]
+        return self.leaderboard[self.winner]
 
     def to_dict(self) -> dict[str, Any]:
         lat = self.edge_latency_us
         return {"leaderboard": [e.as_dict() for e in self.leaderboard], "n_splits": self.n_splits,
-                "gap": self.gap, "skipped": self.skipped,
+                "gap": self.gap, "skipped": self.skipped, "rule": self.rule, "winner": self.winner,
                 "edge_latency_us": None if lat is None else {"p50": lat[0], "p99": lat[1]}}
 
     def __str__(self) -> str:
@@ -151,13 +191,23 @@ class ModelSelection:
 
     def table(self, top: int | None = 10) -> str:
         """The leaderboard as text, the ``top`` best (all with ``None``)."""
-        lines = [f"{'model':44s} {'CV RMS µm':>10s} {'±':>7s} {'fit s':>7s} {'edge µs':>8s}"]
-        shown = self.leaderboard if top is None else self.leaderboard[:top]
-        for e in shown:
-            lines.append(f"{e.candidate.label():44s} {e.cv_rms:10.3f} {e.cv_rms_std:7.3f} {e.fit_s:7.2f} "
+        lines = [f"  {'model':44s} {'CV RMS µm':>10s} {'±':>7s} {'fit s':>7s} {'edge µs':>8s}"]
+        shown = list(range(len(self.leaderboard) if top is None else min(top, len(self.leaderboard))))
+        if self.winner not in shown:
+            shown.append(self.winner)
+        for i in shown:
+            e = self.leaderboard[i]
+            mark = "* " if i == self.winner else "  "
+            lines.append(f"{mark}{e.candidate.label():44s} {e.cv_rms:10.3f} {e.cv_rms_std:7.3f} {e.fit_s:7.2f} "
                          f"{e.edge_us:8.2f}")
         if len(shown) < len(self.leaderboard):
             lines.append(f"... and {len(self.leaderboard) - len(shown)} more (to_dict() / --json has them all)")
+        if self.rule == "1se":
+            lines.append(f"* the winner: the simplest within one standard error of the lowest CV RMS "
+                         f"({self.leaderboard[0].cv_rms:.3f} + {self.leaderboard[0].cv_rms_std / np.sqrt(max(self.n_splits - 1, 1)):.3f} µm; "
+                         "MLR before RBF/SVR, then the strongest ridge; rule='min' / --select min: the lowest)")
+        else:
+            lines.append("* the winner: the lowest CV RMS")
         if self.skipped:
             lines.append(f"({len(self.skipped)} candidates not scored within the budget)")
         if self.edge_latency_us is not None:
@@ -170,10 +220,12 @@ class ModelSelection:
 def select_model(run: Run, axis: str, features: Sequence[str], *, families: Sequence[str] = FAMILIES,
                  history: Sequence[float] | None = None, inputs: str = "rise", cv: int = 5, gap: int = 0,
                  budget_s: float | None = None, seed: int = 0, tune: str | None = None,
-                 tune_pop: int = 10, tune_iters: int = 10,
+                 tune_pop: int = 10, tune_iters: int = 10, rule: str = "1se",
                  progress: Callable[[int, int, str], None] | None = None) -> ModelSelection:
     """Score every candidate of ``families`` on time-ordered splits of ``run`` (the training run
-    only), rank them by mean held-out RMS, refit the best on the whole run and return both.
+    only), rank them by mean held-out RMS, pick the winner by ``rule`` (``"1se"``: the simplest
+    within one standard error of the lowest, the default; ``"min"``: the lowest; module
+    docstring), refit it on the whole run and return both.
 
     ``tune`` (``"cso"`` or ``"pso"``) adds, per history setting, an SVR whose C and γ
     :func:`~thermerr_rs.tune_svr` searches (``tune_pop`` × ``tune_iters``, in its default box
@@ -189,6 +241,8 @@ def select_model(run: Run, axis: str, features: Sequence[str], *, families: Sequ
     splits = time_series_split(len(run), cv, gap=gap)
     if tune is not None and tune not in ("cso", "pso"):
         raise ParameterError(f"tune must be 'cso' or 'pso', got {tune!r}")
+    if rule not in RULES:
+        raise ParameterError(f"rule must be one of {', '.join(RULES)}, got {rule!r}")
     cands = candidates(families, history, (tune, int(tune_pop), int(tune_iters)) if tune else None)
     inputs_by_hist: dict[tuple[float, ...] | None, np.ndarray] = {}
     board: list[Entry] = []
@@ -226,9 +280,10 @@ def select_model(run: Run, axis: str, features: Sequence[str], *, families: Sequ
         board.append(Entry(c, float(np.mean(rms)), float(np.std(rms)), float(np.median(fit_s)),
                            float(np.median(pred_us)), edge_ns / 1e3))
     board.sort(key=lambda e: (e.cv_rms, e.fit_s))
-    win = board[0].candidate
+    winner = pick(board, len(splits), rule)
+    win = board[winner].candidate
     model = win.make(seed).fit_run(run, axis, features, inputs=inputs, history=win.history)
-    return ModelSelection(board, model, len(splits), gap, skipped, edge_latency(model, run))
+    return ModelSelection(board, model, len(splits), gap, skipped, edge_latency(model, run), winner, rule)
 
 
 def edge_latency(model: Estimator, run: Run, samples: int | None = None) -> tuple[float, float]:

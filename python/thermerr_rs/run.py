@@ -14,6 +14,10 @@ from .errors import DataError, MissingColumnError, ParameterError
 
 NanPolicy = Literal["error", "drop", "interpolate"]
 
+#: a run whose clock starts at most this many sampling steps after another's last sample is its
+#: continuation (:meth:`Run.continues`)
+CONTINUATION_STEPS = 10
+
 
 def _date_times(col: Any, source: str) -> F64:
     """A frame's ``time`` column in seconds since the epoch: ``datetime64`` values (UTC for
@@ -188,6 +192,42 @@ class Run:
         }
         if parts["time_s"].shape[0] == 0:
             raise DataError(f"{self.source}: rows {start}:{stop} select nothing")
+        return Run(parts)
+
+    def _step(self) -> float:
+        step = _core.median_step(np.ascontiguousarray(self.time_s, dtype=np.float64))
+        return 1.0 if step is None else float(step)
+
+    def continues(self, before: Run) -> bool:
+        """Whether this run is the continuation of ``before``, cut from the same log: its clock
+        starts after ``before``'s last sample by at most :data:`CONTINUATION_STEPS` of
+        ``before``'s sampling steps (a run cut out of a ``time_s`` log keeps its clock; one with
+        an ISO ``time`` column counts from its own first row and is never taken as one)."""
+        gap = float(self.time_s[0] - before.time_s[-1])
+        return 0.0 < gap <= CONTINUATION_STEPS * before._step()
+
+    def following(self, before: Run) -> Run:
+        """``before``'s rows, then this run's: one run, as a logger running through both would
+        have written it, so that rises are taken from ``before``'s start and history filters run
+        on through the join (``predict_run(run, after=before)``). The columns are those both runs
+        have, in this run's order. A clock that does not go on after ``before``'s last sample (an
+        ISO ``time`` column counts from its own first row) is moved to start one sampling step
+        after it."""
+        names = [n for n in self.names if n in before._index]
+        if not names:
+            raise DataError(f"{self.source}: no column in common with {before.source}")
+        time = self.time_s
+        if time[0] <= before.time_s[-1]:
+            time = time - time[0] + before.time_s[-1] + self._step()
+        parts: dict[str, Any] = {
+            "source": f"{before.source} + {self.source}",
+            "time_s": np.concatenate([before.time_s, time]),
+            "names": names,
+            "data": np.concatenate([before.matrix(names), self.matrix(names)]),
+            "ignored": [],
+            "dropped_rows": [],
+            "interpolated": 0,
+        }
         return Run(parts)
 
     def __repr__(self) -> str:

@@ -1,0 +1,95 @@
+"""A held-out piece of the training run's own log (the published protocol: train on the first 60 %
+of a run, test on 60–80 %): its error is relative to the run's start, so it is predicted from
+that start, as a gateway running since then would (``predict_run(run, after=train)``,
+``Run.following``, ``thermerr fit --test`` on a file whose clock goes on from the training one's)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import thermerr_rs as tr
+from thermerr_rs.cli import main
+from thermerr_rs.errors import DataError
+
+SENSORS = ["T_s01", "T_s07", "T_s10", "T_s13"]
+
+
+def _write(run: tr.Run, path, time_s=None):
+    cols = ["time_s", *run.names]
+    t = run.time_s if time_s is None else time_s
+    rows = np.column_stack([t, run.matrix(run.names)])
+    path.write_text(",".join(cols) + "\n" + "\n".join(",".join(repr(float(v)) for v in r) for r in rows) + "\n")
+    return path
+
+
+def test_a_later_piece_continues_and_following_rejoins_it(example_run1):
+    run = tr.read_run(example_run1)
+    k = len(run) * 6 // 10
+    head, tail = run.slice(0, k), run.slice(k)
+    assert tail.continues(head) and not head.continues(tail)
+    joined = tail.following(head)
+    np.testing.assert_array_equal(joined.time_s, run.time_s)
+    np.testing.assert_array_equal(joined.matrix(joined.names), run.matrix(run.names))
+    # a run of its own (its clock from 0) and a piece after a gap of more than 10 steps do not
+    assert not tr.read_run(example_run1).continues(head)
+    assert run.slice(k + 9).continues(head)  # its first sample 10 steps after the head's last
+    assert not run.slice(k + 10).continues(head)
+
+
+def test_a_restarted_clock_is_moved_after_the_first_run(example_run1):
+    run = tr.read_run(example_run1)
+    k = len(run) // 2
+    head, tail = run.slice(0, k), run.slice(k)
+    tail.time_s = tail.time_s - tail.time_s[0]  # as an ISO time column reads: from its own first row
+    assert not tail.continues(head)
+    joined = tail.following(head)
+    assert np.all(np.diff(joined.time_s) > 0)
+    np.testing.assert_allclose(joined.time_s, run.time_s, rtol=0, atol=1e-6)
+
+
+@pytest.mark.parametrize("make", [lambda: tr.MLR(alpha=1.0), lambda: tr.GreyBP(seed=0)], ids=["mlr", "greybp"])
+def test_predict_after_equals_the_whole_run(make, example_run1):
+    run = tr.read_run(example_run1)
+    k = len(run) * 6 // 10
+    head, tail = run.slice(0, k), run.slice(k)
+    hist = [900.0, 3600.0] if isinstance(make(), tr.MLR) else None
+    model = make().fit_run(head, "E_z", SENSORS, inputs="rise", history=hist)
+    whole = model.predict_run(run)
+    np.testing.assert_array_equal(model.predict_run(tail, after=head), whole[k:])
+    # from the piece's own first sample the rises restart at 0: a different (wrong) prediction
+    assert np.max(np.abs(model.predict_run(tail) - whole[k:])) > 0.1
+
+
+def test_following_needs_a_common_column(example_run1):
+    run = tr.read_run(example_run1)
+    other = tr.Run.from_frame({"time_s": np.arange(5.0), "T_x": np.arange(5.0)})
+    with pytest.raises(DataError, match="no column in common"):
+        other.following(run)
+
+
+def test_cli_test_piece_of_the_training_log(example_run1, tmp_path, capsys):
+    run = tr.read_run(example_run1)
+    k = len(run) * 6 // 10
+    train = _write(run.slice(0, k), tmp_path / "train.csv")
+    test = _write(run.slice(k), tmp_path / "test.csv")
+    out = tmp_path / "m.json"
+    args = ["fit", str(train), "--axis", "E_z", "--sensors", ",".join(SENSORS), "--history", "900,3600",
+            "--out", str(out), "--no-guard", "--json"]
+    assert main([*args, "--test", str(test)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["test_continues_training"] is True
+    model = tr.load_model(out)
+    expect = tr.scores(run["E_z"][k:], model.predict_run(run)[k:])
+    assert report["test"]["rms"] == pytest.approx(expect.rms, rel=1e-12)
+    # the same piece with its clock restarted is taken as a run of its own, unless told
+    restarted = _write(run.slice(k), tmp_path / "test0.csv", time_s=run.time_s[k:] - run.time_s[k])
+    assert main([*args, "--test", str(restarted)]) == 0
+    own = json.loads(capsys.readouterr().out)
+    assert own["test_continues_training"] is False and own["test"]["rms"] != pytest.approx(expect.rms)
+    assert main([*args, "--test", str(restarted), "--test-continues"]) == 0
+    told = json.loads(capsys.readouterr().out)
+    assert told["test_continues_training"] is True
+    assert told["test"]["rms"] == pytest.approx(expect.rms, rel=1e-9)
