@@ -24,6 +24,9 @@ Models, each fitted per channel on the training rows, with no tuning:
 
     python benches/shop_benchmark.py          # about 5 min on 2 cores (324 s on 2026-11-24)
     python benches/shop_benchmark.py --hidden thermal_lag   # the structure lags its sensors
+    python benches/shop_benchmark.py --run RUN.csv --models MLR,SVR   # the protocol on a run of yours
+      (every T_* column as an input, every E_* column a channel; docs/methods.md has the figures of
+      a real 46-h run measured this way)
 
 Seeded throughout (the case seed 1, every model seed 0): the same seed gives the same MAEs.
 """
@@ -71,13 +74,15 @@ def fixed_models(n_train: int) -> dict[str, Callable[[], tr.Estimator]]:
 
 def bench(run: tr.Run, channels: list[str], models: dict[str, Callable[[], tr.Estimator]], *,
           auto: bool = True, families: tuple[str, ...] = ("mlr", "rbf", "svr"),
-          budget_s: float | None = BUDGET_S, seed: int = 0, log: Callable[[str], None] = print) -> dict:
+          budget_s: float | None = BUDGET_S, seed: int = 0, log: Callable[[str], None] = print,
+          features: list[str] | None = None) -> dict:
     """MAE (µm) and fit time (s) per (channel, model) on the test rows; with ``auto`` also what
     select_model picked per channel and its leaderboard."""
     rows_train, rows_test = split(len(run))
     train = run.slice(0, rows_train.stop)
     upto_test = run.slice(0, rows_test.stop)  # predicted from the run's start; scored on the test rows
     test = slice(rows_test.start, rows_test.stop)
+    features = FEATURES if features is None else features
     mae: dict[tuple[str, str], float] = {}
     fit_s: dict[tuple[str, str], float] = {}
     notes: dict[tuple[str, str], str] = {}
@@ -88,7 +93,7 @@ def bench(run: tr.Run, channels: list[str], models: dict[str, Callable[[], tr.Es
         for name, make in models.items():
             t0 = time.perf_counter()
             try:
-                m = make().fit_run(train, ch, FEATURES, inputs="rise")
+                m = make().fit_run(train, ch, features, inputs="rise")
             except tr.ThermerrError as e:
                 notes[ch, name] = f"{type(e).__name__}: {e}"
                 log(f"{ch} {name}: refused ({notes[ch, name]})")
@@ -98,7 +103,7 @@ def bench(run: tr.Run, channels: list[str], models: dict[str, Callable[[], tr.Es
             log(f"{ch} {name}: MAE {mae[ch, name]:.3f} µm, fit {fit_s[ch, name]:.2f} s")
         if auto:
             t0 = time.perf_counter()
-            sel = tr.select_model(train, ch, FEATURES, families=families, history=HISTORY, inputs="rise",
+            sel = tr.select_model(train, ch, features, families=families, history=HISTORY, inputs="rise",
                                   budget_s=budget_s, seed=seed)
             fit_s[ch, "auto"] = time.perf_counter() - t0
             mae[ch, "auto"] = float(np.mean(np.abs(y[test] - sel.model.predict_run(upto_test)[test])))
@@ -121,16 +126,31 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--hidden", choices=["thermal_lag", "ambient_coupling", "speed_growth", "nonlinear_expansion"],
                    help="hide this effect on every channel (default: nothing hidden, the run as shipped)")
+    p.add_argument("--run", help="a run CSV of yours instead of the simulated shop run (its T_* columns are the "
+                                 "inputs, its E_* columns the channels)")
+    p.add_argument("--models", help="the fixed defaults to fit, comma-separated (default: all of "
+                                    + ", ".join(fixed_models(0)) + ")")
     args = p.parse_args()
-    run = shop_run(seed=1, hidden=args.hidden)
+    if args.run:
+        run = tr.read_run(args.run)
+        features, channels = run.temperatures, run.errors
+        what = args.run
+    else:
+        run = shop_run(seed=1, hidden=args.hidden)
+        features, channels = FEATURES, list(SHOP_CHANNELS)
+        what = f"shop run seed 1 (hidden: {args.hidden or 'none'})"
     n, n_train, n_test = len(run), len(split(len(run))[0]), len(split(len(run))[1])
-    print(f"shop run seed 1 (hidden: {args.hidden or 'none'}): {n} rows at 15 s; train rows 0..{n_train - 1} ({n_train}), "
-          f"test rows {n_train}..{n_train + n_test - 1} ({n_test}); inputs {len(FEATURES)} T_t* rises "
-          f"(U_spindle_rpm not used); auto: history {HISTORY} s, budget {BUDGET_S:g} s per channel", flush=True)
-    channels = list(SHOP_CHANNELS)
+    print(f"{what}: {n} rows; train rows 0..{n_train - 1} ({n_train}), "
+          f"test rows {n_train}..{n_train + n_test - 1} ({n_test}); inputs {len(features)} T_* rises "
+          f"(U_* not used); auto: history {HISTORY} s, budget {BUDGET_S:g} s per channel", flush=True)
     models = fixed_models(n_train)
+    if args.models:
+        unknown = set(args.models.split(",")) - set(models)
+        if unknown:
+            p.error(f"unknown models {sorted(unknown)} (known: {', '.join(models)})")
+        models = {k: v for k, v in models.items() if k in args.models.split(",")}
     t0 = time.perf_counter()
-    res = bench(run, channels, models, log=lambda s: print(s, flush=True))
+    res = bench(run, channels, models, log=lambda s: print(s, flush=True), features=features)
     cols = ["none", *models, "auto"]
     print(f"\ntest MAE, µm (rows {n_train}..{n_train + n_test - 1})")
     print(table(res, channels, cols, "mae", ".3f"))
