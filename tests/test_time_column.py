@@ -145,3 +145,32 @@ def test_fit_and_edge_on_a_dated_run_equal_the_time_s_run(example_run1, example_
                          capture_output=True, text=True, timeout=60)
     assert res.returncode == 0 and "line 4: column `time`:" in res.stderr
     assert len(res.stdout.strip().splitlines()) == len(lines) - 1
+
+
+def test_predict_echoes_the_dated_time_column(tmp_path):
+    # thermerr predict on a dated run writes its `time` cells as written (as thermerr-edge does),
+    # the same predictions as from the time_s file; a row dropped for a gap drops its stamp too
+    root = Path(__file__).resolve().parents[1] / "examples"
+    src, machine = root / "vmc_run.csv", root / "vmc_nominal.toml"
+    ref = tr.read_run(src)
+    stamps = _iso(ref.time_s)
+    dated = with_dates(src, tmp_path / "dated.csv", stamps)
+    assert main(["predict", str(src), "--machine", str(machine), "--out", str(tmp_path / "a.csv"), "--quiet"]) == 0
+    assert main(["predict", str(dated), "--machine", str(machine), "--out", str(tmp_path / "b.csv"), "--quiet"]) == 0
+    a = (tmp_path / "a.csv").read_text().splitlines()
+    b = (tmp_path / "b.csv").read_text().splitlines()
+    assert a[0].startswith("time_s,") and b[0] == "time," + a[0].split(",", 1)[1]
+    assert [line.split(",", 1)[0] for line in b[1:]] == stamps
+    assert [line.split(",", 1)[1] for line in b[1:]] == [line.split(",", 1)[1] for line in a[1:]]
+    # a gap dropped with --nan drop: that row's stamp goes with it
+    lines = dated.read_text().splitlines()
+    head = lines[0].split(",")
+    cells = lines[3].split(",")
+    cells[head.index(next(h for h in head if h.startswith("T_")))] = ""
+    lines[3] = ",".join(cells)
+    gap = tmp_path / "gap.csv"
+    gap.write_text("\n".join(lines) + "\n")
+    assert main(["predict", str(gap), "--machine", str(machine), "--out", str(tmp_path / "c.csv"), "--quiet",
+                 "--nan", "drop"]) == 0
+    c = (tmp_path / "c.csv").read_text().splitlines()
+    assert [line.split(",", 1)[0] for line in c[1:]] == stamps[:2] + stamps[3:]

@@ -25,6 +25,7 @@ import math
 import os
 import sys
 import time
+import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
@@ -355,6 +356,28 @@ def cmd_select(args: argparse.Namespace) -> int:
     return 0
 
 
+def _iso_stamps(path: str, delimiter: str, run: Run) -> list[str] | None:
+    """A run file's ISO-8601 ``time`` cells as written, for the rows ``run`` kept (None when the
+    file has a ``time_s`` column or no ``time``): what ``thermerr predict`` echoes, as
+    ``thermerr-edge`` does, instead of seconds since the first row."""
+    import csv
+
+    with open(path, newline="", encoding="utf-8-sig") as f:
+        rows = csv.reader(f, delimiter=delimiter)
+        header = [h.strip() for h in next(rows, [])]
+        if "time_s" in header or "time" not in header:
+            return None
+        k = header.index("time")
+        cells = [r[k].strip() for r in rows if any(c.strip() for c in r)]
+    dropped = set(run.dropped_rows)  # 1-based data rows
+    kept = [c for i, c in enumerate(cells, start=1) if i not in dropped]
+    if len(kept) != len(run):  # the reader and this count differ: seconds are safer than a shift
+        warnings.warn(f"{path}: the time column's cells could not be matched to the rows read; "
+                      "writing time_s", UserWarning, stacklevel=2)
+        return None
+    return kept
+
+
 def cmd_predict(args: argparse.Namespace) -> int:
     from ._io import write_atomic
     from .thermal import Machine
@@ -363,13 +386,14 @@ def cmd_predict(args: argparse.Namespace) -> int:
     machine = Machine.load(args.machine)
     run = _read(args, args.run)
     sim = machine.simulate(run, fit_initial=args.fit_initial)
-    cols = {"time_s": run.time_s}
+    stamps = _iso_stamps(args.run, args.delimiter, run)
+    cols: dict[str, Any] = {"time": stamps} if stamps is not None else {"time_s": run.time_s}
     cols.update({f"{a}_pred": v for a, v in sim.drift.items()})
     cols.update({f"{c}_pred": v for c, v in sim.sensors.items()})
     names = list(cols)
     lines = [",".join(names)]
     for i in range(len(run)):
-        lines.append(",".join(f"{cols[n][i]:.6f}" for n in names))
+        lines.append(",".join(cols[n][i] if n == "time" else f"{cols[n][i]:.6f}" for n in names))
     write_atomic(args.out, "\n".join(lines) + "\n")
     if args.json:
         _print_json({"out": args.out, "columns": names[1:], "samples": len(run)})
