@@ -93,3 +93,23 @@ def test_cli_test_piece_of_the_training_log(example_run1, tmp_path, capsys):
     told = json.loads(capsys.readouterr().out)
     assert told["test_continues_training"] is True
     assert told["test"]["rms"] == pytest.approx(expect.rms, rel=1e-9)
+
+
+def test_cli_evaluate_after(example_run1, tmp_path, capsys):
+    run = tr.read_run(example_run1)
+    k = len(run) * 6 // 10
+    train = _write(run.slice(0, k), tmp_path / "train.csv")
+    test = _write(run.slice(k), tmp_path / "test.csv")
+    out = tmp_path / "m.json"
+    assert main(["fit", str(train), "--axis", "E_z", "--sensors", ",".join(SENSORS), "--history", "900",
+                 "--out", str(out), "--no-guard", "--quiet"]) == 0
+    capsys.readouterr()
+    model = tr.load_model(out)
+    expect = tr.scores(run["E_z"][k:], model.predict_run(run)[k:])
+    assert main(["evaluate", str(out), str(test), "--after", str(train), "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["rms"] == pytest.approx(expect.rms, rel=1e-12) and report["after"] == str(train)
+    # without --after: the piece's own first row, and a note saying why that may be wrong
+    assert main(["evaluate", str(out), str(test)]) == 0
+    text = capsys.readouterr().out
+    assert "pass --after" in text and f"{expect.rms:.3f}" not in text

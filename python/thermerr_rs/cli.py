@@ -331,9 +331,18 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     target = args.axis or model.target_name_
     if not target:
         raise ThermerrError(f"{args.model} does not record its target axis: pass --axis")
-    s = scores(run[target], model.predict_run(run))
+    after = _read(args, args.after) if args.after else None
+    if after is None and run.time_s[0] > 0 and getattr(model, "inputs_", None) == "rise":
+        # rises are taken from the run's own first sample: right for a run of its own, wrong for a
+        # later piece of a longer log (its error is relative to the log's start)
+        _say(args, f"note: {run.source}'s clock starts at {run.time_s[0]:g} s: if it is a later piece of a longer "
+                   "log, pass --after with that log's earlier rows (its rises are taken from its own first row)")
+    if after is not None and not run.continues(after):
+        _say(args, f"note: {run.source}'s clock does not go on from {after.source}'s: it is moved to start one "
+                   "sampling step after it")
+    s = scores(run[target], model.predict_run(run, after=after))
     if args.json:
-        _print_json({"axis": target, **s.as_dict()})
+        _print_json({"axis": target, **s.as_dict(), "after": args.after})
     else:
         wrapped = getattr(model, "estimator", None)  # the model inside a preprocessing wrapper
         inner = wrapped if isinstance(wrapped, Estimator) else model
@@ -648,6 +657,9 @@ def build_parser() -> argparse.ArgumentParser:
     e.add_argument("model", help="model JSON written by 'thermerr fit'")
     e.add_argument("run", help="measured run CSV")
     e.add_argument("--axis", default=None, help="error column (default: the model's target)")
+    e.add_argument("--after", metavar="EARLIER.csv",
+                   help="the run is a later piece of a log whose earlier rows are EARLIER.csv (e.g. the training "
+                        "run): predict it from EARLIER.csv's start, as a gateway running since then")
     common(e)
     e.set_defaults(func=cmd_evaluate)
 
