@@ -113,3 +113,69 @@ def test_cli_evaluate_after(example_run1, tmp_path, capsys):
     assert main(["evaluate", str(out), str(test)]) == 0
     text = capsys.readouterr().out
     assert "pass --after" in text and f"{expect.rms:.3f}" not in text
+
+
+def _edge(edge_bin, *args):
+    import subprocess
+
+    return subprocess.run([str(edge_bin), *map(str, args)], capture_output=True, text=True, timeout=60)
+
+
+@pytest.mark.parametrize("guard", [False, True], ids=["plain", "guarded"])
+def test_edge_reference_equals_the_library(guard, example_run1, edge_bin, tmp_path):
+    # a gateway started mid-run: thermerr-edge --reference TRAIN.csv takes the rises from the
+    # training run's first row, as predict_run(run, reference=train) does; without history the
+    # prediction is then the whole run's, as a gateway running since its start would give
+    run = tr.read_run(example_run1)
+    k = len(run) // 2
+    head, tail = run.slice(0, k), run.slice(k)
+    train, test = _write(head, tmp_path / "train.csv"), _write(tail, tmp_path / "test.csv")
+    out = tmp_path / "m.json"
+    fit = ["fit", str(train), "--axis", "E_z", "--sensors", ",".join(SENSORS), "--out", str(out), "--quiet"]
+    assert main(fit + ([] if guard else ["--no-guard"])) == 0
+    model = tr.load_model(out)
+    want = model.predict_run(tail, reference=head)
+    np.testing.assert_array_equal(want, model.predict_run(run)[k:])
+    res = _edge(edge_bin, out, test, "--reference", train)
+    assert res.returncode == 0, res.stderr
+    got = np.array([float(ln.split(",")[1]) for ln in res.stdout.strip().splitlines()[1:]])
+    np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-9)
+    if guard:
+        assert all(ln.endswith(",ok") for ln in res.stdout.strip().splitlines()[1:])
+    # without it, the stream's own first row: the rises restart at 0
+    plain = _edge(edge_bin, out, test)
+    got0 = np.array([float(ln.split(",")[1]) for ln in plain.stdout.strip().splitlines()[1:]])
+    np.testing.assert_allclose(got0, model.predict_run(tail), rtol=1e-9, atol=1e-9)
+    assert np.max(np.abs(got0 - want)) > 0.1
+
+
+def test_edge_reference_with_history_equals_the_library(example_run1, edge_bin, tmp_path):
+    run = tr.read_run(example_run1)
+    k = len(run) // 2
+    head, tail = run.slice(0, k), run.slice(k)
+    model = tr.MLR(alpha=1.0).fit_run(head, "E_z", SENSORS, inputs="rise", history=[900.0, 3600.0])
+    out = model.save(tmp_path / "m.json")
+    train, test = _write(head, tmp_path / "train.csv"), _write(tail, tmp_path / "test.csv")
+    res = _edge(edge_bin, out, test, "--reference", train)
+    assert res.returncode == 0, res.stderr
+    got = np.array([float(ln.split(",")[1]) for ln in res.stdout.strip().splitlines()[1:]])
+    np.testing.assert_allclose(got, model.predict_run(tail, reference=head), rtol=1e-9, atol=1e-9)
+
+
+def test_edge_reference_bad_input_is_one_line_exit_2(example_run1, edge_bin, tmp_path):
+    run = tr.read_run(example_run1)
+    rise = tr.MLR().fit_run(run, "E_z", SENSORS, inputs="rise").save(tmp_path / "rise.json")
+    absolute = tr.MLR().fit_run(run, "E_z", SENSORS, inputs="absolute").save(tmp_path / "abs.json")
+    (tmp_path / "empty.csv").write_text("time_s," + ",".join(SENSORS) + "\n")
+    (tmp_path / "other.csv").write_text("time_s,T_x\n0,20\n")
+    for model, ref, why in [
+        (absolute, example_run1, "absolute readings"),
+        (rise, tmp_path / "empty.csv", "no data row after the header"),
+        (rise, tmp_path / "other.csv", "no column T_s01"),
+        (rise, tmp_path / "missing.csv", "missing.csv"),
+    ]:
+        res = _edge(edge_bin, model, example_run1, "--reference", ref)
+        assert res.returncode == 2 and why in res.stderr and len(res.stderr.strip().splitlines()) == 1, res.stderr
+        assert res.stdout == ""
+    with pytest.raises(tr.ThermerrError, match="absolute readings"):
+        tr.load_model(absolute).predict_run(run, reference=run)

@@ -150,7 +150,7 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         self.input_history_ = hist
         return self
 
-    def predict_run(self, run: Any, *, shape: Any = None, after: Any = None) -> F64:
+    def predict_run(self, run: Any, *, shape: Any = None, after: Any = None, reference: Any = None) -> F64:
         """Predict a run from the columns (and input form) the model was fitted on.
 
         ``shape`` (e.g. ``"limit=50,rate=2,unit=0.1"``): return the offsets a CNC would be sent
@@ -162,21 +162,28 @@ class Estimator(BaseEstimator):  # type: ignore[misc]
         ``after`` followed by ``run`` (:meth:`Run.following`), so that rises are taken from
         ``after``'s start, as the error itself is, and history filters run on through the join;
         only ``run``'s rows are returned. Without it, rises start at ``run``'s first sample: right
-        for a run of its own (the probes zeroed at its start), wrong for a piece of a longer one."""
+        for a run of its own (the probes zeroed at its start), wrong for a piece of a longer one.
+
+        ``reference`` (a :class:`~thermerr_rs.Run`): the rises are taken from its first sample
+        instead of ``run``'s (history filters still start at ``run``'s first sample): what
+        ``thermerr-edge --reference RUN.csv`` does for a gateway started in the middle of a run."""
         if after is not None:
-            return _continued(self.predict_run, run, after, shape)
-        y = self._predict_columns(self._run_matrix(run))
+            return _continued(self.predict_run, run, after, shape, reference=reference)
+        y = self._predict_columns(self._run_matrix(run, reference))
         if shape is None:
             return y
         from .shaping import shape_offsets
 
         return shape_offsets(run.time_s, y, shape)
 
-    def _run_matrix(self, run: Any) -> F64:
+    def _run_matrix(self, run: Any, reference: Any = None) -> F64:
         self._check_fitted()
         if not self.feature_names_in_:
             raise ModelFormatError("this model does not record its feature columns; use predict(X)")
-        return run_inputs(run, self.feature_names_in_, self.inputs_, getattr(self, "input_history_", None))
+        if reference is not None and self.inputs_ != "rise":
+            raise ParameterError("reference: the model reads absolute readings, not rises")
+        return run_inputs(run, self.feature_names_in_, self.inputs_, getattr(self, "input_history_", None),
+                          reference=reference)
 
     def _check_fitted(self) -> None:
         if self._inner is None:
@@ -343,10 +350,15 @@ def _history(taus: Sequence[float] | None, time_s: F64) -> dict[str, Any] | None
     return {"tau_s": tau, "step_s": 1.0 if step is None else step}
 
 
-def run_inputs(run: Any, features: list[str], inputs: str, history: dict[str, Any] | None) -> F64:
-    """A model's inputs from a run: the named columns as ``inputs`` says (absolute or rise),
-    then, with a ``history`` entry, each reading's rises over its time constants."""
-    x: F64 = run.input_matrix(features, inputs)
+def run_inputs(run: Any, features: list[str], inputs: str, history: dict[str, Any] | None, *,
+               reference: Any = None) -> F64:
+    """A model's inputs from a run: the named columns as ``inputs`` says (absolute or rise; with
+    a ``reference`` run, rises from its first sample), then, with a ``history`` entry, each
+    reading's rises over its time constants."""
+    if reference is not None and inputs == "rise":
+        x: F64 = np.ascontiguousarray(run.matrix(features) - reference.matrix(features)[0])
+    else:
+        x = run.input_matrix(features, inputs)
     if history is not None:
         x = _core.history_transform(x, run.time_s, history["tau_s"], history["step_s"])
     return x

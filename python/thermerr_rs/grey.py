@@ -50,12 +50,13 @@ class _Sequential(SequenceModel):
         out: F64 = self._inner.predict(x, y)
         return out
 
-    def predict_run(self, run: Any, *, one_step: bool = False, shape: Any = None, after: Any = None) -> F64:
+    def predict_run(self, run: Any, *, one_step: bool = False, shape: Any = None, after: Any = None,
+                    reference: Any = None) -> F64:
         """Predict a run closed loop, or one step ahead from its measured target column;
-        ``shape`` and ``after`` as in :meth:`Estimator.predict_run`."""
+        ``shape``, ``after`` and ``reference`` as in :meth:`Estimator.predict_run`."""
         if after is not None:
-            return _continued(self.predict_run, run, after, shape, one_step=one_step)
-        x = self._run_matrix(run)
+            return _continued(self.predict_run, run, after, shape, one_step=one_step, reference=reference)
+        x = self._run_matrix(run, reference)
         if one_step:
             if not self.target_name_:
                 raise ModelFormatError("this model does not record its target column")

@@ -451,6 +451,17 @@ impl GuardedPredictor {
         self.row = 0;
     }
 
+    /// Fixes the rise reference of the main model and of each fallback (its own sensors'
+    /// readings of `x`, one per feature of the main model): [`Predictor::set_reference`].
+    pub fn set_reference(&mut self, x: &[f64]) -> Result<()> {
+        self.main.set_reference(x)?;
+        for (p, idx) in self.fallbacks.iter_mut().flatten() {
+            let sub: Vec<f64> = idx.iter().map(|&i| x[i]).collect();
+            p.set_reference(&sub)?;
+        }
+        Ok(())
+    }
+
     /// One row of raw readings (NaN for a missing one) at time `t` (seconds; `None` for the
     /// row count times `step_s`): the prediction, or `None` while some sensor has not given a
     /// good reading yet. [`GuardedPredictor::write_status`] tells what was done.

@@ -116,6 +116,12 @@ impl Predictor {
         self.0.reset()
     }
 
+    /// Fixes the readings the rises are taken from (the core's
+    /// [`thermerr_core::artifact::Predictor::set_reference`]).
+    pub fn set_reference(&mut self, x: &[f64]) -> Result<()> {
+        self.0.set_reference(x).map_err(format_error)
+    }
+
     /// Per-sample latency of `n` predictions cycling through `rows` (the core's
     /// [`thermerr_core::artifact::Predictor::latency`]).
     pub fn latency(

@@ -16,6 +16,11 @@
 //!
 //! `--bench-latency N` times N predictions over the run's rows (cycling, with a reset at each
 //! pass) and prints per-sample latency percentiles and the peak resident memory as JSON.
+//!
+//! `--reference RUN.csv` takes a model's rises from the first data row of RUN.csv (the readings
+//! the error is relative to: the training run's start, or the readings when the probes were
+//! zeroed) instead of the stream's own first row: for a gateway started, or restarted, in the
+//! middle of a run on a warm machine.
 
 use std::io::{BufRead, BufReader, Write};
 use std::process::ExitCode;
@@ -24,17 +29,41 @@ use thermerr_core::shape::{Shaper, Shaping};
 use thermerr_edge::filter::{Guarded, LineFilter};
 use thermerr_edge::Predictor;
 
-const USAGE: &str = "usage: thermerr-edge MODEL.json [RUN.csv] [--shape SPEC] [--no-guard] [--bench-latency N]
+const USAGE: &str =
+    "usage: thermerr-edge MODEL.json [RUN.csv] [--shape SPEC] [--no-guard] [--bench-latency N]
   Reads CSV rows (header first) from RUN.csv or stdin, writes time_s,<target>_pred per row.
   A model fitted with a sensor-fault guard adds a status column (ok, held:T_x, fallback:T_x,
   frozen:T_x, joined by ;): missing, out-of-range, too fast or stuck readings are held, then
   predicted without (fallback model) or the last output repeated. --no-guard ignores the guard.
   --shape limit=50,rate=2,deadband=0.5,unit=0.1,bits=16 adds <target>_offset, the prediction
-  clamped (um), held within a dead band (um), rate-limited (um/s) and quantised (um, register bits).";
+  clamped (um), held within a dead band (um), rate-limited (um/s) and quantised (um, register bits).
+  --reference RUN.csv takes the rises from RUN.csv's first data row (e.g. the training run's start,
+  where the error is zero) instead of the stream's first row: a gateway started mid-run.";
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
     eprintln!("thermerr-edge: error: {msg}");
     ExitCode::from(2)
+}
+
+/// The model's readings in the first data row of the run file at `path`, picked by name as the
+/// stream's are: the rise reference of `--reference`.
+fn reference_row(path: &str, p: &Predictor) -> Result<Vec<f64>, String> {
+    let f = std::fs::File::open(path).map_err(|e| format!("--reference {path}: {e}"))?;
+    let mut lines = BufReader::new(f).lines();
+    let header = match lines.next() {
+        Some(Ok(h)) => h,
+        Some(Err(e)) => return Err(format!("--reference {path}: {e}")),
+        None => return Err(format!("--reference {path}: the file is empty")),
+    };
+    let mut filter = LineFilter::new(&header, p).map_err(|e| format!("--reference {path}: {e}"))?;
+    match lines.next() {
+        Some(Ok(line)) => filter
+            .parse_row(line.trim_end_matches('\r'))
+            .map(|(x, _)| x.to_vec())
+            .map_err(|e| format!("--reference {path}: line 2: {e}")),
+        Some(Err(e)) => Err(format!("--reference {path}: line 2: {e}")),
+        None => Err(format!("--reference {path}: no data row after the header")),
+    }
 }
 
 fn run(
@@ -43,7 +72,13 @@ fn run(
     bench: Option<usize>,
     mut shaper: Option<Shaper>,
     use_guard: bool,
+    reference: Option<Vec<f64>>,
 ) -> ExitCode {
+    if let Some(x) = &reference {
+        if let Err(e) = p.set_reference(x) {
+            return fail(format!("--reference: {e}"));
+        }
+    }
     let mut lines = input.lines();
     let header = match lines.next() {
         Some(Ok(h)) => h,
@@ -72,6 +107,12 @@ fn run(
     } else {
         None
     };
+    if let (Some(g), Some(x)) = (guarded.as_mut(), &reference) {
+        // the fallback models take the same reference, each for its own sensors
+        if let Err(e) = g.set_reference(x) {
+            return fail(format!("--reference: {e}"));
+        }
+    }
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let mut header = format!("{},{target}_pred", filter.time_name());
@@ -205,6 +246,14 @@ fn main() -> ExitCode {
         }
         args.drain(k..k + 2);
     }
+    let mut reference_path = None;
+    if let Some(k) = args.iter().position(|a| a == "--reference") {
+        match args.get(k + 1) {
+            Some(v) => reference_path = Some(v.clone()),
+            None => return fail("--reference takes a run file, e.g. the training run"),
+        }
+        args.drain(k..k + 2);
+    }
     let use_guard = match args.iter().position(|a| a == "--no-guard") {
         Some(k) => {
             args.remove(k);
@@ -231,5 +280,13 @@ fn main() -> ExitCode {
         },
         None => Box::new(BufReader::new(std::io::stdin())),
     };
-    run(&mut p, input, bench, shaper, use_guard)
+    let reference = match reference_path
+        .as_deref()
+        .map(|path| reference_row(path, &p))
+    {
+        None => None,
+        Some(Ok(x)) => Some(x),
+        Some(Err(e)) => return fail(e),
+    };
+    run(&mut p, input, bench, shaper, use_guard, reference)
 }

@@ -71,6 +71,8 @@ pub struct Predictor {
     // per-run state
     first: Vec<f64>,
     have_first: bool,
+    /// the rise reference was given ([`Predictor::set_reference`]) and outlives a reset
+    fixed_first: bool,
     /// the readings after the rise, before the history is added (the model's inputs without one)
     raw: Vec<f64>,
     history: Option<HistoryState>,
@@ -94,6 +96,7 @@ impl Predictor {
             artifact,
             first: vec![0.0; n_in],
             have_first: false,
+            fixed_first: false,
             raw: vec![0.0; n_in],
             acc: vec![0.0; n],
             y1_prev: 0.0,
@@ -179,9 +182,41 @@ impl Predictor {
         })
     }
 
-    /// Forgets the run so far: the next sample starts a new run.
+    /// Fixes the readings the rises are taken from (one per feature, in the model's order),
+    /// instead of the run's first sample: for a stream that starts in the middle of a run (a
+    /// gateway restarted on a warm machine), whose error is still relative to the run's start.
+    /// Kept across [`Predictor::reset`]. An error for a model that reads absolute readings, or
+    /// for a wrong count or a reading that is not finite.
+    pub fn set_reference(&mut self, x: &[f64]) -> Result<()> {
+        if self.artifact.header.inputs != Inputs::Rise {
+            return Err(Error::param(
+                "reference",
+                "the model reads absolute readings, not rises: a rise reference means nothing to it",
+            ));
+        }
+        if x.len() != self.first.len() {
+            return Err(Error::Shape(format!(
+                "the rise reference needs {} readings, got {}",
+                self.first.len(),
+                x.len()
+            )));
+        }
+        if let Some(j) = x.iter().position(|v| !v.is_finite()) {
+            return Err(Error::Shape(format!(
+                "reading {j} of the rise reference is not a finite number ({})",
+                x[j]
+            )));
+        }
+        self.first.copy_from_slice(x);
+        self.have_first = true;
+        self.fixed_first = true;
+        Ok(())
+    }
+
+    /// Forgets the run so far: the next sample starts a new run (from the fixed rise reference,
+    /// if one was set).
     pub fn reset(&mut self) {
-        self.have_first = false;
+        self.have_first = self.fixed_first;
         if let Some(h) = &mut self.history {
             h.reset();
         }

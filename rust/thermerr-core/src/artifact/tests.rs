@@ -304,3 +304,30 @@ fn a_range_of_infinite_width_is_refused() {
     let e = Artifact::from_json(&v.to_string()).unwrap_err().to_string();
     assert!(e.contains("target range"), "{e}");
 }
+
+#[test]
+fn a_fixed_rise_reference_replaces_the_first_sample_and_outlives_a_reset() {
+    let mut p = Predictor::from_json(&fixture("mlr_rise")).unwrap();
+    let n = p.n_inputs();
+    let start: Vec<f64> = (0..n).map(|j| 20.0 + j as f64).collect();
+    let later: Vec<f64> = start.iter().map(|v| v + 1.5).collect();
+    // the stream from the start: its second sample is 1.5 K above the first
+    let mut whole = p.clone();
+    whole.predict_sample(&start).unwrap();
+    let want = whole.predict_sample(&later).unwrap();
+    // a stream that starts at the second sample, with the start as its reference
+    p.set_reference(&start).unwrap();
+    assert_eq!(p.predict_sample(&later).unwrap(), want);
+    p.reset();
+    assert_eq!(p.predict_sample(&later).unwrap(), want);
+    // without one, the first sample is the reference: rises of 0
+    let mut own = Predictor::from_json(&fixture("mlr_rise")).unwrap();
+    assert_ne!(own.predict_sample(&later).unwrap(), want);
+    // wrong count, non-finite reading: errors naming what
+    let e = p.set_reference(&start[1..]).unwrap_err().to_string();
+    assert!(e.contains(&format!("needs {n} readings")), "{e}");
+    let mut bad = start.clone();
+    bad[0] = f64::NAN;
+    let e = p.set_reference(&bad).unwrap_err().to_string();
+    assert!(e.contains("reading 0") && e.contains("not a finite"), "{e}");
+}
