@@ -42,6 +42,9 @@ int te_has_guard(const te_model *m);
 /* t: seconds (NaN: row count times the guard's step); status: NULL or status_len bytes */
 int te_predict_guarded(te_model *m, double t, const double *x, size_t n, double *out,
                        char *status, size_t status_len);
+/* the readings the rises are taken from, instead of each run's first sample (a gateway started
+ * mid-run: e.g. the training run's first row); kept across te_reset */
+int te_set_reference(te_model *m, const double *x, size_t n);
 void te_reset(te_model *m);
 void te_close(te_model *m);
 const char *te_last_error(void);

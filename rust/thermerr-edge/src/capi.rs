@@ -224,6 +224,50 @@ pub unsafe extern "C" fn te_predict_guarded(
     })
 }
 
+/// Fixes the readings the rises are taken from (`n` of them at `x`, in the model's feature
+/// order), for `te_predict` and `te_predict_guarded` alike, instead of each run's first sample:
+/// a gateway started in the middle of a run on a warm machine (`thermerr-edge --reference`).
+/// Kept across `te_reset`. Returns 0, or -1 a NULL argument, -2 the wrong number of features,
+/// -3 a non-finite reading or a model on absolute readings, -4 an internal error.
+///
+/// # Safety
+/// `m` as for `te_n_features`; `x` must point to `n` doubles.
+#[no_mangle]
+pub unsafe extern "C" fn te_set_reference(m: *mut TeModel, x: *const f64, n: usize) -> c_int {
+    if m.is_null() || x.is_null() {
+        set_error("te_set_reference: NULL argument");
+        return TE_ERR_NULL;
+    }
+    let r = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: per the contract above
+        let (m, xs) = unsafe { (&mut *m, std::slice::from_raw_parts(x, n)) };
+        if n != m.p.n_inputs() {
+            set_error(&format!(
+                "te_set_reference: the model takes {} features, got {n}",
+                m.p.n_inputs()
+            ));
+            return TE_ERR_FEATURES;
+        }
+        let set = m.p.set_reference(xs).and_then(|()| match &mut m.g {
+            Some(g) => g
+                .set_reference(xs)
+                .map_err(|e| crate::EdgeError::Input(e.to_string())),
+            None => Ok(()),
+        });
+        match set {
+            Ok(()) => TE_OK,
+            Err(e) => {
+                set_error(&e.to_string());
+                TE_ERR_INPUT
+            }
+        }
+    }));
+    r.unwrap_or_else(|_| {
+        set_error("te_set_reference: internal error (panic)");
+        TE_ERR_PANIC
+    })
+}
+
 /// Starts a new run (forgets the first sample and accumulated state).
 ///
 /// # Safety

@@ -333,3 +333,47 @@ fn c_program_prints_the_same_numbers() {
     }
     let _ = std::fs::remove_file(&bin);
 }
+
+#[test]
+fn c_abi_reference_starts_a_stream_mid_run_as_the_whole_run_would() {
+    use std::ffi::CString;
+    use thermerr_edge::capi::{
+        te_close, te_open, te_predict, te_reset, te_set_reference, TE_ERR_FEATURES, TE_ERR_INPUT,
+        TE_OK,
+    };
+    let (names, rows) = run();
+    let model = fixtures().join("svr_rise.json");
+    let mut whole = Predictor::load(&model).unwrap();
+    let idx: Vec<usize> = whole
+        .features()
+        .unwrap()
+        .iter()
+        .map(|f| names.iter().position(|n| n == f).unwrap())
+        .collect();
+    let x: Vec<Vec<f64>> = rows
+        .iter()
+        .map(|r| idx.iter().map(|&j| r[j]).collect())
+        .collect();
+    let want: Vec<f64> = x.iter().map(|r| whole.predict_sample(r).unwrap()).collect();
+    let path = CString::new(model.to_str().unwrap()).unwrap();
+    // SAFETY: a NUL-terminated path, buffers of the sizes passed, the model closed once
+    unsafe {
+        let m = te_open(path.as_ptr());
+        assert!(!m.is_null());
+        let n = x[0].len();
+        assert_eq!(te_set_reference(m, x[0].as_ptr(), n - 1), TE_ERR_FEATURES);
+        let nan = vec![f64::NAN; n];
+        assert_eq!(te_set_reference(m, nan.as_ptr(), n), TE_ERR_INPUT);
+        assert_eq!(te_set_reference(m, x[0].as_ptr(), n), TE_OK);
+        let k = x.len() / 2;
+        for pass in 0..2 {
+            for (r, w) in x[k..].iter().zip(&want[k..]) {
+                let mut y = f64::NAN;
+                assert_eq!(te_predict(m, r.as_ptr(), n, &mut y), TE_OK);
+                assert_eq!(y, *w, "pass {pass}");
+            }
+            te_reset(m); // the reference outlives a reset
+        }
+        te_close(m);
+    }
+}
