@@ -877,45 +877,61 @@ fn scan_i(g: &[f64], y: &[f64], up: &[bool], off: usize) -> (f64, usize) {
     (gmax, idx)
 }
 
-/// The gradient update G_t += Q_it Δα_i + Q_jt Δα_j over a slice starting at variable `off`,
-/// and [`scan_i`] of the updated slice in the same pass (lanes, as [`Pass2::run`]).
+/// The gradient update of one SMO step, G_t += Q_it Δα_i + Q_jt Δα_j: the two kernel columns,
+/// the two steps, and each variable's label and I_up membership, over the same variables as
+/// the slice of G it is applied to.
 #[cfg(feature = "fit")]
-#[allow(clippy::too_many_arguments)]
-fn update_scan(
-    g: &mut [f64],
-    qi: &[f32],
-    qj: &[f32],
+#[derive(Clone, Copy)]
+struct Update<'s> {
+    qi: &'s [f32],
+    qj: &'s [f32],
     dai: f64,
     daj: f64,
-    y: &[f64],
-    up: &[bool],
-    off: usize,
-) -> (f64, usize) {
+    y: &'s [f64],
+    up: &'s [bool],
+}
+
+#[cfg(feature = "fit")]
+impl<'s> Update<'s> {
+    /// The same update for the variables from `k` on.
+    fn from(&self, k: usize) -> Update<'s> {
+        Update {
+            qi: &self.qi[k..],
+            qj: &self.qj[k..],
+            y: &self.y[k..],
+            up: &self.up[k..],
+            ..*self
+        }
+    }
+}
+
+/// The gradient update `u` over a slice of G starting at variable `off`, and [`scan_i`] of the
+/// updated slice in the same pass (lanes, as [`Pass2::run`]).
+#[cfg(feature = "fit")]
+fn update_scan(u: &Update<'_>, g: &mut [f64], off: usize) -> (f64, usize) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2, checked just above
-        return unsafe { update_scan_avx2(g, qi, qj, dai, daj, y, up, off) };
+        return unsafe { update_scan_avx2(u, g, off) };
     }
-    update_scan_lanes(g, qi, qj, dai, daj, y, up, off)
+    update_scan_lanes(u, g, off)
 }
 
 /// [`update_scan_lanes`] in AVX2 intrinsics: the same operations in the same order on four
 /// variables at a time, then the scalar loop's lanes for the rest.
 #[cfg(all(feature = "fit", target_arch = "x86_64"))]
 #[target_feature(enable = "avx2")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn update_scan_avx2(
-    g: &mut [f64],
-    qi: &[f32],
-    qj: &[f32],
-    dai: f64,
-    daj: f64,
-    y: &[f64],
-    up: &[bool],
-    off: usize,
-) -> (f64, usize) {
+unsafe fn update_scan_avx2(u: &Update<'_>, g: &mut [f64], off: usize) -> (f64, usize) {
     use std::arch::x86_64::*;
     let n = g.len();
+    let Update {
+        qi,
+        qj,
+        dai,
+        daj,
+        y,
+        up,
+    } = *u;
     assert!(qi.len() >= n && qj.len() >= n && y.len() >= n && up.len() >= n);
     let full = n - n % LANES;
     let (vdi, vdj, vnan, sign) = (
@@ -972,16 +988,7 @@ unsafe fn update_scan_avx2(
         mx: m4,
         ix: i4.map(|v| if v < 0.0 { usize::MAX } else { v as usize }),
     };
-    lanes.update(
-        &mut g[full..],
-        &qi[full..n],
-        &qj[full..n],
-        dai,
-        daj,
-        &y[full..n],
-        &up[full..n],
-        off + full,
-    );
+    lanes.update(&u.from(full), &mut g[full..], off + full);
     lanes.join()
 }
 
@@ -995,22 +1002,13 @@ struct ScanLanes {
 
 #[cfg(feature = "fit")]
 impl ScanLanes {
-    /// Updates G over a slice starting at variable `off` and scans it into lane (t mod LANES).
+    /// Applies `u` to a slice of G starting at variable `off` and scans it into lane
+    /// (t mod LANES).
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn update(
-        &mut self,
-        g: &mut [f64],
-        qi: &[f32],
-        qj: &[f32],
-        dai: f64,
-        daj: f64,
-        y: &[f64],
-        up: &[bool],
-        off: usize,
-    ) {
+    fn update(&mut self, u: &Update<'_>, g: &mut [f64], off: usize) {
         let n = g.len();
-        let (qi, qj, y, up) = (&qi[..n], &qj[..n], &y[..n], &up[..n]);
+        let (qi, qj, y, up) = (&u.qi[..n], &u.qj[..n], &u.y[..n], &u.up[..n]);
+        let (dai, daj) = (u.dai, u.daj);
         for t in 0..n {
             let k = (off + t) % LANES;
             let gt = g[t] + (qi[t] as f64 * dai + qj[t] as f64 * daj);
@@ -1039,22 +1037,12 @@ impl ScanLanes {
 
 /// The portable [`update_scan`]: one pass through [`ScanLanes`].
 #[cfg(feature = "fit")]
-#[allow(clippy::too_many_arguments)]
-fn update_scan_lanes(
-    g: &mut [f64],
-    qi: &[f32],
-    qj: &[f32],
-    dai: f64,
-    daj: f64,
-    y: &[f64],
-    up: &[bool],
-    off: usize,
-) -> (f64, usize) {
+fn update_scan_lanes(u: &Update<'_>, g: &mut [f64], off: usize) -> (f64, usize) {
     let mut lanes = ScanLanes {
         mx: [f64::NEG_INFINITY; LANES],
         ix: [usize::MAX; LANES],
     };
-    lanes.update(g, qi, qj, dai, daj, y, up, off);
+    lanes.update(u, g, off);
     lanes.join()
 }
 
@@ -1613,22 +1601,15 @@ impl Solver<'_, '_> {
         self.update_status(i);
         self.update_status(j);
         let next = {
-            let (qi, qj) = (&self.qi[..a], &self.qj[..a]);
-            let (y, up) = (&self.yf[..a], &self.up[..a]);
-            let step = |g: &mut [f64], off: usize| {
-                let sl = off..off + g.len();
-                update_scan(
-                    g,
-                    &qi[sl.clone()],
-                    &qj[sl.clone()],
-                    dai,
-                    daj,
-                    &y[sl.clone()],
-                    &up[sl],
-                    off,
-                )
+            let u = Update {
+                qi: &self.qi[..a],
+                qj: &self.qj[..a],
+                dai,
+                daj,
+                y: &self.yf[..a],
+                up: &self.up[..a],
             };
-            step(&mut self.g[..a], 0)
+            update_scan(&u, &mut self.g[..a], 0)
         };
         if ui != self.is_upper(i) {
             let ri = self.q.col(i);
@@ -2059,8 +2040,16 @@ mod lane_tests {
                 }
                 let want = scan_i(&g_seq, &y, &low, 3);
                 let (mut g1, mut g2) = (g.clone(), g.clone());
-                let a = update_scan_lanes(&mut g1, &qi, &qj, dai, daj, &y, &low, 3);
-                let b = update_scan(&mut g2, &qi, &qj, dai, daj, &y, &low, 3);
+                let u = Update {
+                    qi: &qi,
+                    qj: &qj,
+                    dai,
+                    daj,
+                    y: &y,
+                    up: &low,
+                };
+                let a = update_scan_lanes(&u, &mut g1, 3);
+                let b = update_scan(&u, &mut g2, 3);
                 for (got, gg) in [(a, &g1), (b, &g2)] {
                     assert_eq!(
                         (got.0.to_bits(), got.1),
