@@ -25,6 +25,14 @@ def _write(run: tr.Run, path, time_s=None):
     return path
 
 
+def _cut(path, tmp_path):
+    """The run at ``path``, the row where its test part starts (60 %), and the two parts as
+    files, cut as a user would: train.csv, then test.csv with the clock as logged."""
+    run = tr.read_run(path)
+    k = len(run) * 6 // 10
+    return run, k, _write(run.slice(0, k), tmp_path / "train.csv"), _write(run.slice(k), tmp_path / "test.csv")
+
+
 def test_a_later_piece_continues_and_following_rejoins_it(example_run1):
     run = tr.read_run(example_run1)
     k = len(run) * 6 // 10
@@ -71,10 +79,7 @@ def test_following_needs_a_common_column(example_run1):
 
 
 def test_cli_test_piece_of_the_training_log(example_run1, tmp_path, capsys):
-    run = tr.read_run(example_run1)
-    k = len(run) * 6 // 10
-    train = _write(run.slice(0, k), tmp_path / "train.csv")
-    test = _write(run.slice(k), tmp_path / "test.csv")
+    run, k, train, test = _cut(example_run1, tmp_path)
     out = tmp_path / "m.json"
     args = ["fit", str(train), "--axis", "E_z", "--sensors", ",".join(SENSORS), "--history", "900,3600",
             "--out", str(out), "--no-guard", "--json"]
@@ -96,10 +101,7 @@ def test_cli_test_piece_of_the_training_log(example_run1, tmp_path, capsys):
 
 
 def test_cli_evaluate_after(example_run1, tmp_path, capsys):
-    run = tr.read_run(example_run1)
-    k = len(run) * 6 // 10
-    train = _write(run.slice(0, k), tmp_path / "train.csv")
-    test = _write(run.slice(k), tmp_path / "test.csv")
+    run, k, train, test = _cut(example_run1, tmp_path)
     out = tmp_path / "m.json"
     assert main(["fit", str(train), "--axis", "E_z", "--sensors", ",".join(SENSORS), "--history", "900",
                  "--out", str(out), "--no-guard", "--quiet"]) == 0

@@ -21,6 +21,7 @@ from . import _core
 from ._arrays import F64, as_matrix, as_target, check_features, feature_names, series_name
 from ._io import write_atomic
 from .errors import ModelFormatError, NotFittedError, ParameterError, ShapeError
+from .run import median_step
 
 #: Schema version of the model files this library writes and reads (the core's).
 FORMAT_VERSION: int = _core.FORMAT_VERSION
@@ -345,9 +346,7 @@ def _history(taus: Sequence[float] | None, time_s: F64) -> dict[str, Any] | None
     ``time_s`` (``step_s``: its median step, used where a stream has no times)."""
     if taus is None:
         return None
-    tau = [float(t) for t in taus]
-    step = _core.median_step(np.ascontiguousarray(time_s, dtype=np.float64))
-    return {"tau_s": tau, "step_s": 1.0 if step is None else step}
+    return {"tau_s": [float(t) for t in taus], "step_s": median_step(time_s)}
 
 
 def run_inputs(run: Any, features: list[str], inputs: str, history: dict[str, Any] | None, *,
@@ -355,10 +354,7 @@ def run_inputs(run: Any, features: list[str], inputs: str, history: dict[str, An
     """A model's inputs from a run: the named columns as ``inputs`` says (absolute or rise; with
     a ``reference`` run, rises from its first sample), then, with a ``history`` entry, each
     reading's rises over its time constants."""
-    if reference is not None and inputs == "rise":
-        x: F64 = np.ascontiguousarray(run.matrix(features) - reference.matrix(features)[0])
-    else:
-        x = run.input_matrix(features, inputs)
+    x: F64 = run.input_matrix(features, inputs, reference)
     if history is not None:
         x = _core.history_transform(x, run.time_s, history["tau_s"], history["step_s"])
     return x

@@ -19,6 +19,12 @@ NanPolicy = Literal["error", "drop", "interpolate"]
 CONTINUATION_STEPS = 10
 
 
+def median_step(time_s: Any) -> float:
+    """The median sampling step of a clock, in s (the core's rule; 1 s when it has none)."""
+    step = _core.median_step(np.ascontiguousarray(time_s, dtype=np.float64))
+    return 1.0 if step is None else float(step)
+
+
 def _date_times(col: Any, source: str) -> F64:
     """A frame's ``time`` column in seconds since the epoch: ``datetime64`` values (UTC for
     time-zone aware ones) converted here, strings read by the core's ISO-8601 reader (as a CSV's
@@ -167,15 +173,17 @@ class Run:
         for name in [target, *features]:
             self[name]  # raises MissingColumnError naming the column and the file
 
-    def input_matrix(self, features: list[str], form: str = "absolute") -> F64:
+    def input_matrix(self, features: list[str], form: str = "absolute", reference: Run | None = None) -> F64:
         """The model inputs built from the named columns: ``form="absolute"`` the readings as
         they are, ``"rise"`` each reading minus the run's first sample (like the error itself,
-        which is relative to the run's start). What ``fit_run``/``predict_run`` feed a model."""
+        which is relative to the run's start), or minus ``reference``'s first sample when given.
+        What ``fit_run``/``predict_run`` feed a model."""
         if form not in ("absolute", "rise"):
             raise ParameterError(f'the input form must be "absolute" or "rise", got {form!r}')
         x = self.matrix(features)
         if form == "rise":
-            x = np.ascontiguousarray(x - x[0])
+            x0 = x[0] if reference is None else reference.matrix(features)[0]
+            x = np.ascontiguousarray(x - x0)
         return x
 
     def slice(self, start: int | None = None, stop: int | None = None) -> Run:
@@ -194,17 +202,13 @@ class Run:
             raise DataError(f"{self.source}: rows {start}:{stop} select nothing")
         return Run(parts)
 
-    def _step(self) -> float:
-        step = _core.median_step(np.ascontiguousarray(self.time_s, dtype=np.float64))
-        return 1.0 if step is None else float(step)
-
     def continues(self, before: Run) -> bool:
         """Whether this run is the continuation of ``before``, cut from the same log: its clock
         starts after ``before``'s last sample by at most :data:`CONTINUATION_STEPS` of
         ``before``'s sampling steps (a run cut out of a ``time_s`` log keeps its clock; one with
         an ISO ``time`` column counts from its own first row and is never taken as one)."""
         gap = float(self.time_s[0] - before.time_s[-1])
-        return 0.0 < gap <= CONTINUATION_STEPS * before._step()
+        return 0.0 < gap <= CONTINUATION_STEPS * median_step(before.time_s)
 
     def following(self, before: Run) -> Run:
         """``before``'s rows, then this run's: one run, as a logger running through both would
@@ -218,7 +222,7 @@ class Run:
             raise DataError(f"{self.source}: no column in common with {before.source}")
         time = self.time_s
         if time[0] <= before.time_s[-1]:
-            time = time - time[0] + before.time_s[-1] + self._step()
+            time = time - time[0] + before.time_s[-1] + median_step(self.time_s)
         parts: dict[str, Any] = {
             "source": f"{before.source} + {self.source}",
             "time_s": np.concatenate([before.time_s, time]),
