@@ -388,22 +388,56 @@ pub fn evaluate(
         store_drift(&mut fitted, tg.axis_index, &coef);
     }
     let sim = finish(&fitted, run, temps)?;
+    let e = &sim.drift[tg.axis_index].1;
+    let r = normalised(&fitted, run, tg, &sim.temps, e, rows, sigma_t, sigma_e);
+    Ok((fitted, sim, r))
+}
+
+/// The normalised data residuals of `m` over `rows` (sensors, then the axis' error), the drift
+/// coefficients re-solved on `rows`: the third part of what [`evaluate`] returns, without
+/// building the simulation's readings and every axis' drift (the search's inner loop).
+fn residuals(
+    m: &Machine,
+    init: &[f64],
+    run: &RunView<'_>,
+    tg: &Targets<'_>,
+    rows: usize,
+    sigma_t: f64,
+    sigma_e: f64,
+) -> Result<Vec<f64>> {
+    let temps = simulate_nodes(m, run, &Init::Offsets(init.to_vec()))?;
+    let (_, e) = fit_drift(m, tg.axis_index, run, &temps, tg.measured_e, rows, sigma_e)?;
+    Ok(normalised(m, run, tg, &temps, &e, rows, sigma_t, sigma_e))
+}
+
+/// The residuals of node temperatures `temps` and the axis' drift `e` against the targets over
+/// `rows`: each sensed node's reading, then the error, each over its noise level.
+#[allow(clippy::too_many_arguments)]
+fn normalised(
+    m: &Machine,
+    run: &RunView<'_>,
+    tg: &Targets<'_>,
+    temps: &[f64],
+    e: &[f64],
+    rows: usize,
+    sigma_t: f64,
+    sigma_e: f64,
+) -> Vec<f64> {
     let mut r = Vec::with_capacity(rows * (tg.sensors.len() + 1));
     let nn = m.nodes.len();
     for &(i, meas) in &tg.sensors {
-        let node = &fitted.nodes[i];
+        let node = &m.nodes[i];
         for (k, (mk, tk)) in meas.iter().zip(run.time).take(rows).enumerate() {
-            let pred = sim.temps[k * nn + i]
+            let pred = temps[k * nn + i]
                 + node.sensor_offset_k
                 + node.sensor_drift_k_per_h * (tk - run.time[0]) / 3600.0;
             r.push((pred - mk) / sigma_t);
         }
     }
-    let e = &sim.drift[tg.axis_index].1;
     for (ek, mk) in e.iter().zip(tg.measured_e).take(rows) {
         r.push((ek - mk) / sigma_e);
     }
-    Ok((fitted, sim, r))
+    r
 }
 
 /// Runs sampled faster than this are calibrated on every k-th sample, k = ⌊`FIT_STEP_S` / median
@@ -485,7 +519,7 @@ fn calibrate_all_rows(
     };
     let residual = |x: &[f64]| -> Result<Vec<f64>> {
         let (mm, init) = apply(m, &free, x);
-        let (_, _, mut r) = evaluate(&mm, &init, run, &tg, rows, sigma_t, sigma_e, true)?;
+        let mut r = residuals(&mm, &init, run, &tg, rows, sigma_t, sigma_e)?;
         for (fp, v) in free.iter().zip(x) {
             if let Some((c, w)) = fp.prior {
                 r.push((v - c) / w);

@@ -329,6 +329,11 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
     }
     let mut out = vec![0.0; n_t * nn];
     let ticks = Ticks::new(t);
+    // each step in ticks (the times are rounded, not the steps: see Ticks)
+    let dt: Vec<i64> = {
+        let at: Vec<i64> = t.iter().map(|&v| ticks.at(v)).collect();
+        at.windows(2).map(|w| w[1] - w[0]).collect()
+    };
     let augmented = |h: f64| {
         let mut big = DMatrix::<f64>::zeros(2 * nd, 2 * nd);
         big.view_mut((0, 0), (nd, nd)).copy_from(&net.m);
@@ -348,10 +353,8 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         // many distinct step lengths close together (a jittering logger): e^{B·(m+1)q} =
         // e^{B·mq}·e^{Bq}, so one exponential for the shortest step and one for the grid step,
         // then a small product per grid step up to the longest, instead of one exponential each
-        let mut steps: Vec<i64> = t
-            .windows(2)
-            .map(|w| ticks.at(w[1]) - ticks.at(w[0]))
-            .collect();
+        let mut steps = dt.clone();
+        steps.dedup(); // a logger's steps repeat: the sort below sees a handful of values
         steps.sort_unstable();
         steps.dedup();
         if let (Some(&lo), Some(&hi)) = (steps.first(), steps.last()) {
@@ -396,7 +399,7 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         if k % 1024 == 0 {
             crate::interrupt::check()?;
         }
-        let steps = ticks.at(t[k + 1]) - ticks.at(t[k]);
+        let steps = dt[k];
         for (fp, g) in f.iter_mut().zip(&net.g_amb) {
             *fp = g * amb[k];
         }

@@ -235,6 +235,38 @@ pub(super) struct Baseline<'a> {
     /// Calibration options of the extensions (the baseline's noise levels).
     pub options: CalibrationOptions,
     pub axis_index: usize,
+    /// [`node_sensor_mate`] by column, worked out once per baseline: every unmodelled-source
+    /// candidate on a column (screened, then fitted in full) has the same node sensors.
+    pub mate_of: std::sync::Mutex<std::collections::HashMap<String, Option<String>>>,
+}
+
+impl<'a> Baseline<'a> {
+    pub fn new(
+        calibration: &'a Calibration,
+        holdout: &'a Holdout,
+        options: CalibrationOptions,
+        axis_index: usize,
+    ) -> Self {
+        Baseline {
+            calibration,
+            holdout,
+            options,
+            axis_index,
+            mate_of: Default::default(),
+        }
+    }
+
+    /// [`node_sensor_mate`] of `col` on machine `m` (which has the baseline's node sensors).
+    fn mate_of(&self, m: &Machine, train: &RunView<'_>, rows: usize, col: &str) -> Option<String> {
+        let cached = self.mate_of.lock().ok().and_then(|c| c.get(col).cloned());
+        cached.unwrap_or_else(|| {
+            let v = node_sensor_mate(m, train, rows, col);
+            if let Ok(mut c) = self.mate_of.lock() {
+                c.insert(col.to_string(), v.clone());
+            }
+            v
+        })
+    }
 }
 
 /// The start of a search from the calibrated baseline's values (where the spec's machine has
@@ -458,7 +490,7 @@ fn scored(
     };
     let rows = base.options.fit_rows.unwrap_or(train.len());
     let mate_of = match (spec.cause, &spec.column) {
-        (Cause::UnmodeledSource, Some(col)) => node_sensor_mate(&spec.machine, train, rows, col),
+        (Cause::UnmodeledSource, Some(col)) => base.mate_of(&spec.machine, train, rows, col),
         _ => None,
     };
     let mates = match (spec.cause, &spec.column, &spec.node) {

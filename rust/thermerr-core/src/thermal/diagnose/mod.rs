@@ -442,16 +442,16 @@ pub fn diagnose(
     let baseline = calibrate(m, train, &copts, None)?;
     progress::step(pg);
     let base_hold = score::holdout(&baseline, &held)?;
-    let base = Baseline {
-        calibration: &baseline,
-        holdout: &base_hold,
-        options: CalibrationOptions {
+    let base = Baseline::new(
+        &baseline,
+        &base_hold,
+        CalibrationOptions {
             sigma_t: Some(baseline.sigma_t),
             sigma_e: Some(baseline.sigma_e),
             ..copts
         },
         axis_index,
-    };
+    );
     // extensions are built on the nominal machine, so that bounds and priors are the baseline's
     // (centred on the user's estimate); the search starts from the calibrated values
     let cx = RoundInput {

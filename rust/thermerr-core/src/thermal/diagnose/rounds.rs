@@ -200,12 +200,12 @@ where
             .iter()
             .filter_map(|(_, c)| c.spec.as_ref())
             .collect();
-        let b = Baseline {
-            calibration: &cur.calibration,
-            holdout: &cur.holdout,
-            options: base.options.clone(),
+        let b = Baseline::new(
+            &cur.calibration,
+            &cur.holdout,
+            base.options.clone(),
             axis_index,
-        };
+        );
         let cands = fit_round(&spec.machine, &b, &carried, &taken)?;
         let best = cands.iter().position(supported);
         let ok = best.is_some_and(|j| passes(&cands[j], &cur.holdout, noise, opts));
@@ -236,12 +236,12 @@ where
                     })?;
                 let extra =
                     candidates::carry(&spec.extra, &spec.machine, &joint.calibration.machine);
-                let b = Baseline {
-                    calibration: &joint.calibration,
-                    holdout: &joint.holdout,
-                    options: base.options.clone(),
+                let b = Baseline::new(
+                    &joint.calibration,
+                    &joint.holdout,
+                    base.options.clone(),
                     axis_index,
-                };
+                );
                 let reduced = candidates::fit(Spec { extra, ..spec }, &b, cx.train, cx.held);
                 progress::step(opts.progress.as_deref());
                 let reduced = reduced?;
