@@ -435,11 +435,14 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
             }
             cur_steps = Some(steps);
         }
-        for (p, xp) in xn.iter_mut().enumerate() {
-            let (pr, gr) = (&phi[p * nd..(p + 1) * nd], &gam[p * nd..(p + 1) * nd]);
+        for ((xp, pr), gr) in xn
+            .iter_mut()
+            .zip(phi.chunks_exact(nd))
+            .zip(gam.chunks_exact(nd))
+        {
             let mut acc = 0.0;
-            for q in 0..nd {
-                acc += pr[q] * x[q] + gr[q] * f[q];
+            for (((pq, xq), gq), fq) in pr.iter().zip(&x).zip(gr).zip(&f) {
+                acc += pq * xq + gq * fq;
             }
             *xp = acc;
         }
