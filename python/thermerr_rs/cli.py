@@ -480,7 +480,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         _stage(args, f"diagnosing {args.machine} on {run.source}, {len(axes)} axes ({', '.join(axes)}) in "
                      "parallel: calibrating each baseline, screening every candidate extension ...")
         t0 = time.perf_counter()
-        multi = diagnose_axes(run, machine, hold, axes=axes, progress=_progress_enabled(args))
+        multi = diagnose_axes(run, machine, hold, axes=axes, network=args.network,
+                              progress=_progress_enabled(args))
         _stage(args, f"diagnosed {len(axes)} axes in {time.perf_counter() - t0:.1f} s")
         for a in multi.axes:
             _stage(args, f"  {a}: " + _stage_times(multi[a].report))
@@ -489,7 +490,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         _stage(args, f"diagnosing {args.machine} on {run.source}: calibrating the baseline, screening "
                      "every candidate extension ...")
         t0 = time.perf_counter()
-        result = diagnose(run, machine, hold, axis=axes[0] if axes else None, progress=_progress_enabled(args))
+        result = diagnose(run, machine, hold, axis=axes[0] if axes else None, network=args.network,
+                          progress=_progress_enabled(args))
         _stage(args, f"diagnosed in {time.perf_counter() - t0:.1f} s: " + _stage_times(result.report))
     page = result.write(args.out)
     if args.json:
@@ -709,6 +711,11 @@ def build_parser() -> argparse.ArgumentParser:
                     help="error axis; repeat for several (default: every drift entry of the machine). "
                          "Several axes write a summary report.json/report.html and <axis>.report.json, "
                          "<axis>.report.html, <axis>.calibrated.toml, <axis>.extended.toml")
+    dg.add_argument("--network", choices=("recalibrate", "keep", "best"), default="recalibrate",
+                    help="the baseline's thermal network: recalibrate it on the training rows and the axis "
+                         "(default), keep it as the machine file gives it (only the start and the drift map "
+                         "fitted: a network `thermerr init` identified from this run, or one you trust), or "
+                         "best: both, and the one with the smaller held-out residual")
     common(dg)
     dg.set_defaults(func=cmd_diagnose)
 

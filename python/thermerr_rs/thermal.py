@@ -248,19 +248,24 @@ def _progress_bar(show: bool | None, desc: str) -> Iterator[Callable[[int, int, 
 
 def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: str | None = None,
              holdout_fraction: float = 0.3, min_score: float = 0.1, noise_ratio: float = 2.0,
-             progress: bool | None = None) -> Diagnosis:
+             network: str = "recalibrate", progress: bool | None = None) -> Diagnosis:
     """Calibrate ``machine`` on ``run`` (its first 70 % when no ``holdout`` run is given), fit the
     extension of every catalogued cause, score all on the held-out data and name the cause; then
     go on in rounds on the extended machine while a further cause passes (docs/machine-model.md).
 
     Every figure in the result is on held-out data: the ``holdout`` run, or the last
-    ``holdout_fraction`` of ``run``. ``progress``: a bar of the calibrations done (default: when
-    stderr is a terminal).
+    ``holdout_fraction`` of ``run``. ``network``: the baseline's thermal network —
+    ``"recalibrate"`` (default: every capacity, conductance and source fitted on the training rows
+    and this axis), ``"keep"`` (the machine's network as given, only the initial offsets and the
+    drift map fitted: a network identified from this very run, or one you trust) or ``"best"``
+    (both, and the one with the smaller held-out residual; ``report["baseline_network"]`` gives
+    both held-out RMS). Candidates still refit the network with their extension.
+    ``progress``: a bar of the calibrations done (default: when stderr is a terminal).
     """
     with _progress_bar(progress, "diagnosis") as cb:
         d = machine._inner.diagnose(*_run_args(run), _run_args(holdout) if holdout is not None else None,
                                     axis=axis, holdout_fraction=holdout_fraction, min_score=min_score,
-                                    noise_ratio=noise_ratio, progress=cb)
+                                    noise_ratio=noise_ratio, network=network, progress=cb)
     return _diagnosis(d)
 
 
@@ -303,6 +308,7 @@ class AxesDiagnosis:
             "gain_pct": {a: d.gain_pct for a, d in self.by_axis.items()},
             "remainder_um": {a: d.remainder_um for a, d in self.by_axis.items()},
             "baseline_rmse_um": {a: d.report["baseline"]["rmse_um"] for a, d in self.by_axis.items()},
+            "baseline_network": {a: d.report["baseline_network"]["network"] for a, d in self.by_axis.items()},
             "extended_rmse_um": {a: d.report["extended"]["rmse_um"] for a, d in self.by_axis.items()},
             "reports": {a: f"{a}.report.json" for a in self.by_axis},
             "identified": any(d.report["identified"] for d in self.by_axis.values()),
@@ -326,14 +332,17 @@ class AxesDiagnosis:
 
 def diagnose_axes(run: Run, machine: Machine, holdout: Run | None = None, *, axes: list[str] | None = None,
                   holdout_fraction: float = 0.3, min_score: float = 0.1,
-                  noise_ratio: float = 2.0, progress: bool | None = None) -> AxesDiagnosis:
+                  noise_ratio: float = 2.0, network: str = "recalibrate",
+                  progress: bool | None = None) -> AxesDiagnosis:
     """:func:`diagnose` for several error axes at once (default: every drift entry of the
     machine), in parallel. Each axis is diagnosed on the shared temperatures and its own error
     column, with its own calibration of the network and its own causes and remainder.
+    ``network``: as for :func:`diagnose`, per axis.
     ``progress``: one bar of every axis's calibrations (default: when stderr is a terminal)."""
     with _progress_bar(progress, "diagnosis of the axes") as cb:
         ds = machine._inner.diagnose_axes(*_run_args(run), _run_args(holdout) if holdout is not None else None,
                                           axes=list(axes or []), holdout_fraction=holdout_fraction,
-                                          min_score=min_score, noise_ratio=noise_ratio, progress=cb)
+                                          min_score=min_score, noise_ratio=noise_ratio, network=network,
+                                          progress=cb)
     out = {d.axis: d for d in map(_diagnosis, ds)}
     return AxesDiagnosis(out, run.source, machine._inner.file)

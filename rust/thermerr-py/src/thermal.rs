@@ -271,7 +271,7 @@ impl PyMachine {
 
     /// The full diagnosis; returns a dict: `report` (report.json as JSON text), `calibration`
     /// (the baseline's fit figures), `series` and the calibrated/extended TOML.
-    #[pyo3(signature = (source, time, names, data, holdout = None, *, axis = None, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0, progress = None))]
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axis = None, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0, network = "recalibrate", progress = None))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn diagnose<'py>(
         &self,
@@ -285,10 +285,17 @@ impl PyMachine {
         holdout_fraction: f64,
         min_score: f64,
         noise_ratio: f64,
+        network: &str,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let (opts, watch) =
-            diagnose_options(axis, holdout_fraction, min_score, noise_ratio, progress);
+        let (opts, watch) = diagnose_options(
+            axis,
+            holdout_fraction,
+            min_score,
+            noise_ratio,
+            network,
+            progress,
+        )?;
         let diag = self.on_runs(
             py,
             source,
@@ -304,7 +311,7 @@ impl PyMachine {
 
     /// The diagnosis of every axis in `axes`, one per axis in parallel, each on the shared
     /// temperatures and its own error column; a list of `diagnose`'s dicts in `axes` order.
-    #[pyo3(signature = (source, time, names, data, holdout = None, *, axes, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0, progress = None))]
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axes, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0, network = "recalibrate", progress = None))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn diagnose_axes<'py>(
         &self,
@@ -318,10 +325,17 @@ impl PyMachine {
         holdout_fraction: f64,
         min_score: f64,
         noise_ratio: f64,
+        network: &str,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-        let (opts, watch) =
-            diagnose_options(None, holdout_fraction, min_score, noise_ratio, progress);
+        let (opts, watch) = diagnose_options(
+            None,
+            holdout_fraction,
+            min_score,
+            noise_ratio,
+            network,
+            progress,
+        )?;
         let diags = self.on_runs(
             py,
             source,
@@ -401,18 +415,20 @@ fn diagnose_options(
     holdout_fraction: f64,
     min_score: f64,
     noise_ratio: f64,
+    network: &str,
     progress: Option<Py<PyAny>>,
-) -> (DiagnoseOptions, Watch) {
+) -> PyResult<(DiagnoseOptions, Watch)> {
     let counts = progress.as_ref().map(|_| Arc::new(Progress::new()));
     let opts = DiagnoseOptions {
         axis,
         holdout_fraction,
         min_score,
         noise_ratio,
+        network: network.parse().map_err(PyErrWrap)?,
         progress: counts.clone(),
         ..DiagnoseOptions::default()
     };
-    (opts, progress.zip(counts))
+    Ok((opts, progress.zip(counts)))
 }
 
 /// Calls a Python progress callable with `(done, planned, stage)` when the counts changed

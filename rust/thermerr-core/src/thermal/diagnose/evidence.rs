@@ -2,7 +2,26 @@
 
 use super::rounds::{Accepted, Round, MIN_SHARE_OF_EXCESS};
 use super::verdict::{supported, Verdict};
-use super::{Candidate, Holdout};
+use super::{BaselineNetwork, Candidate, Holdout, NetworkRule};
+
+/// Which network the baseline has, when it is not the default (recalibrated on the axis).
+pub fn network(b: &BaselineNetwork, axis: &str) -> String {
+    match (b.rule, b.recalibrated_rmse_um, b.kept_rmse_um) {
+        (NetworkRule::Recalibrate, _, _) => String::new(),
+        (NetworkRule::Best, Some(r), Some(k)) if b.network == "kept" => format!(
+            " The baseline keeps the machine's network as given (only its start and the drift map \
+             fitted): it leaves the smaller held-out residual, {k:.2} µm on {axis} against {r:.2} µm \
+             with the network recalibrated on this axis."
+        ),
+        (NetworkRule::Best, Some(r), Some(k)) => format!(
+            " The baseline's network is recalibrated on this axis: it leaves the smaller held-out \
+             residual, {r:.2} µm on {axis} against {k:.2} µm with the network as given."
+        ),
+        _ => " The baseline keeps the machine's network as given (only its start and the drift \
+              map fitted)."
+            .to_string(),
+    }
+}
 
 /// "cause on `column`", "cause on node `node`" or "cause".
 fn place(cause: impl std::fmt::Display, column: Option<&str>, node: Option<&str>) -> String {

@@ -66,6 +66,9 @@ pub struct DiagnoseOptions {
     /// A baseline whose held-out RMS is within this many noise levels is "none".
     pub noise_ratio: f64,
     pub calibration: CalibrationOptions,
+    /// The baseline's thermal network: recalibrated on the training rows and the axis, kept as
+    /// the machine gives it, or the better of the two on the held-out data.
+    pub network: NetworkRule,
     /// Counts the calibrations planned and done and the round reached, for a progress bar
     /// (shared by the axes of [`diagnose_axes`]).
     pub progress: Option<Arc<Progress>>,
@@ -80,9 +83,121 @@ impl Default for DiagnoseOptions {
             min_score: 0.1,
             noise_ratio: 2.0,
             calibration: CalibrationOptions::default(),
+            network: NetworkRule::Recalibrate,
             progress: None,
         }
     }
+}
+
+/// How the baseline's thermal network is obtained (option `network`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum NetworkRule {
+    /// Every capacity, conductance and source calibrated on the training rows and the axis.
+    #[default]
+    Recalibrate,
+    /// The network as the machine gives it; only the initial offsets and the axis' drift map are
+    /// fitted (a network identified from this very run, or one the user trusts).
+    Keep,
+    /// Both, and the one whose held-out residual (error and temperatures, noise-normalised) is
+    /// the smaller.
+    Best,
+}
+
+impl NetworkRule {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            NetworkRule::Recalibrate => "recalibrate",
+            NetworkRule::Keep => "keep",
+            NetworkRule::Best => "best",
+        }
+    }
+}
+
+impl std::str::FromStr for NetworkRule {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "recalibrate" => Ok(NetworkRule::Recalibrate),
+            "keep" => Ok(NetworkRule::Keep),
+            "best" => Ok(NetworkRule::Best),
+            other => Err(Error::param(
+                "network",
+                format!("`{other}` is not one of recalibrate, keep, best"),
+            )),
+        }
+    }
+}
+
+/// Which network the baseline has, and (rule `best`) both baselines' held-out figures.
+#[derive(Clone, Debug, Serialize)]
+pub struct BaselineNetwork {
+    pub rule: NetworkRule,
+    /// `recalibrated` or `kept`.
+    pub network: &'static str,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recalibrated_rmse_um: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kept_rmse_um: Option<f64>,
+    /// The held-out residual the rule `best` compares: Σ of the squared noise-normalised
+    /// residuals of the error and the sensed temperatures.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recalibrated_joint_ssr: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kept_joint_ssr: Option<f64>,
+}
+
+/// The baseline under `rule`, and its held-out figures.
+fn baseline_of(
+    m: &Machine,
+    train: &RunView<'_>,
+    copts: &CalibrationOptions,
+    held: &HeldOut<'_, '_>,
+    rule: NetworkRule,
+) -> Result<(Calibration, Holdout, BaselineNetwork)> {
+    let recal = || -> Result<(Calibration, Holdout)> {
+        let c = calibrate(m, train, copts, None)?;
+        let h = score::holdout(&c, held)?;
+        Ok((c, h))
+    };
+    let kept = || -> Result<(Calibration, Holdout)> {
+        let o = CalibrationOptions {
+            thermal: false,
+            ..copts.clone()
+        };
+        let c = calibrate(m, train, &o, None)?;
+        let h = score::holdout(&c, held)?;
+        Ok((c, h))
+    };
+    let choice = |network, both: Option<(&Holdout, &Holdout)>| BaselineNetwork {
+        rule,
+        network,
+        recalibrated_rmse_um: both.map(|(r, _)| r.rmse_um),
+        kept_rmse_um: both.map(|(_, k)| k.rmse_um),
+        recalibrated_joint_ssr: both.map(|(r, _)| r.joint_ssr),
+        kept_joint_ssr: both.map(|(_, k)| k.joint_ssr),
+    };
+    Ok(match rule {
+        NetworkRule::Recalibrate => {
+            let (c, h) = recal()?;
+            (c, h, choice("recalibrated", None))
+        }
+        NetworkRule::Keep => {
+            let (c, h) = kept()?;
+            (c, h, choice("kept", None))
+        }
+        NetworkRule::Best => {
+            let (r, k) = rayon::join(recal, kept);
+            let ((rc, rh), (kc, kh)) = (r?, k?);
+            if kh.joint_ssr < rh.joint_ssr {
+                let b = choice("kept", Some((&rh, &kh)));
+                (kc, kh, b)
+            } else {
+                let b = choice("recalibrated", Some((&rh, &kh)));
+                (rc, rh, b)
+            }
+        }
+    })
 }
 
 /// Figures of one model on the held-out data; serialises as the report's three figures.
@@ -175,6 +290,8 @@ pub struct Diagnosis {
     pub noise_um: f64,
     pub baseline: Calibration,
     pub baseline_holdout: Holdout,
+    /// Which network the baseline has (option `network`).
+    pub baseline_network: BaselineNetwork,
     /// Round 1's candidates, sorted by score, best first.
     pub candidates: Vec<Candidate>,
     /// Index in `candidates` of round 1's named cause, if it is still named after the rounds.
@@ -208,6 +325,7 @@ pub struct Report<'a> {
     pub column: Option<&'a str>,
     pub evidence: &'a str,
     pub baseline: &'a Holdout,
+    pub baseline_network: &'a BaselineNetwork,
     pub extended: &'a Holdout,
     pub gain_pct: f64,
     pub noise_um: f64,
@@ -254,6 +372,7 @@ impl Diagnosis {
             column: self.column.as_deref(),
             evidence: &self.evidence,
             baseline: &self.baseline_holdout,
+            baseline_network: &self.baseline_network,
             extended: self.extended_holdout(),
             gain_pct: self.gain_pct(),
             noise_um: self.noise_um,
@@ -439,9 +558,9 @@ pub fn diagnose(
     let pg = opts.progress.as_deref();
     progress::stage(pg, 1);
     progress::plan(pg, 1);
-    let baseline = calibrate(m, train, &copts, None)?;
+    let (baseline, base_hold, baseline_network) =
+        baseline_of(m, train, &copts, &held, opts.network)?;
     progress::step(pg);
-    let base_hold = score::holdout(&baseline, &held)?;
     let base = Baseline::new(
         &baseline,
         &base_hold,
@@ -515,6 +634,7 @@ pub fn diagnose(
         !outcome.causes.is_empty(),
         opts.min_score,
     ));
+    evidence.push_str(&evidence::network(&baseline_network, &axis));
     let (holdout_label, holdout_time, holdout_measured) = match hold {
         Some(h) => (
             format!("the separate run {}", h.source),
@@ -541,6 +661,7 @@ pub fn diagnose(
         noise_um: noise,
         baseline,
         baseline_holdout: base_hold,
+        baseline_network,
         candidates: cands,
         chosen,
         untried_columns,
