@@ -715,7 +715,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="the baseline's thermal network: recalibrate it on the training rows and the axis "
                          "(default), keep it as the machine file gives it (only the start and the drift map "
                          "fitted: a network `thermerr init` identified from this run, or one you trust), or "
-                         "best: both, and the one with the smaller held-out residual")
+                         "best: both, and the one with the smaller held-out residual of the error and the "
+                         "temperatures together (noise-normalised)")
     common(dg)
     dg.set_defaults(func=cmd_diagnose)
 

@@ -258,7 +258,8 @@ def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: st
     ``"recalibrate"`` (default: every capacity, conductance and source fitted on the training rows
     and this axis), ``"keep"`` (the machine's network as given, only the initial offsets and the
     drift map fitted: a network identified from this very run, or one you trust) or ``"best"``
-    (both, and the one with the smaller held-out residual; ``report["baseline_network"]`` gives
+    (both, and the one with the smaller held-out residual of the error and the temperatures
+    together, noise-normalised; ``report["baseline_network"]`` gives
     both held-out RMS). Candidates still refit the network with their extension.
     ``progress``: a bar of the calibrations done (default: when stderr is a terminal).
     """

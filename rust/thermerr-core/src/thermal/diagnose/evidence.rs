@@ -10,12 +10,14 @@ pub fn network(b: &BaselineNetwork, axis: &str) -> String {
         (NetworkRule::Recalibrate, _, _) => String::new(),
         (NetworkRule::Best, Some(r), Some(k)) if b.network == "kept" => format!(
             " The baseline keeps the machine's network as given (only its start and the drift map \
-             fitted): it leaves the smaller held-out residual, {k:.2} µm on {axis} against {r:.2} µm \
-             with the network recalibrated on this axis."
+             fitted): it leaves the smaller held-out residual of the error and the temperatures \
+             together (noise-normalised) than the network recalibrated on this axis; on {axis} \
+             alone {k:.2} µm against {r:.2} µm."
         ),
         (NetworkRule::Best, Some(r), Some(k)) => format!(
             " The baseline's network is recalibrated on this axis: it leaves the smaller held-out \
-             residual, {r:.2} µm on {axis} against {k:.2} µm with the network as given."
+             residual of the error and the temperatures together (noise-normalised) than the \
+             network as given; on {axis} alone {r:.2} µm against {k:.2} µm."
         ),
         _ => " The baseline keeps the machine's network as given (only its start and the drift \
               map fitted)."
