@@ -93,3 +93,16 @@ def test_the_cli_writes_the_rule_into_the_report(case, tmp_path):
                  "--network", "keep", "--quiet"]) == 0
     rep = json.loads((tmp_path / "d" / "report.json").read_text())
     assert rep["baseline_network"]["network"] == "kept"
+
+
+def test_the_summary_of_several_axes_names_each_baseline_network(case, tmp_path):
+    from thermerr_rs.thermal import diagnose_axes
+
+    train, m, test, _ = case
+    multi = diagnose_axes(train, m, test, network="best", progress=False)
+    chosen = {a: multi[a].report["baseline_network"]["network"] for a in multi.axes}
+    assert set(chosen.values()) <= {"kept", "recalibrated"}
+    assert multi.report["baseline_network"] == chosen
+    page = (multi.write(tmp_path / "d").parent / "report.html").read_text()
+    assert "<th>baseline network</th>" in page
+    assert all(f"<td>{v}</td>" in page for v in chosen.values())

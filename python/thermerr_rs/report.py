@@ -326,7 +326,8 @@ def render_axes_html(summary: dict[str, Any]) -> str:
         ) or "—"
         rows.append(
             f"<tr><td><a href='{esc(a)}.report.html'>{esc(a)}</a></td><td>{esc(summary['verdicts'][a])}</td>"
-            f"<td>{esc(causes)}</td><td>{summary['baseline_rmse_um'][a]:.3f}</td>"
+            f"<td>{esc(causes)}</td><td>{esc(summary.get('baseline_network', {}).get(a, 'recalibrated'))}</td>"
+            f"<td>{summary['baseline_rmse_um'][a]:.3f}</td>"
             f"<td>{summary['extended_rmse_um'][a]:.3f}</td><td>{summary['gain_pct'][a]:.1f}</td>"
             f"<td>{summary['remainder_um'][a]:.3f}</td></tr>")
     return (
@@ -337,7 +338,7 @@ def render_axes_html(summary: dict[str, Any]) -> str:
         "every figure on held-out data</p>"
         + (f"<p>The network was <b>identified from data</b> by <code>thermerr init</code>, "
            f"{esc(IDENTIFIED_CAVEAT)}</p>" if summary.get("identified") else "")
-        + "<table><tr><th>axis</th><th>verdict</th><th>causes</th>"
+        + "<table><tr><th>axis</th><th>verdict</th><th>causes</th><th>baseline network</th>"
         "<th>baseline RMS (µm)</th><th>extended RMS (µm)</th><th>gain (%)</th>"
         "<th>unexplained remainder (µm)</th></tr>" + "".join(rows) + "</table></body></html>\n")
 
