@@ -215,3 +215,21 @@ def test_all_ok_is_exit_0_and_rerun_skips_the_summary(runs, tmp_path, capsys):
     m = tr.load_model(d / "m01.json")
     assert m.feature_names_in_ == tr.read_run(d / "m01.csv").temperatures and m.inputs_ == "rise"
     assert np.isfinite(m.predict_run(tr.read_run(d / "m02.csv"))).all()
+
+
+def test_diagnose_passes_the_network_rule_to_every_run(tmp_path):
+    """`--network` reaches each run's diagnosis (threads here): the same figures as diagnose()
+    with that rule, and the rule recorded in each report; a wrong rule is refused up front."""
+    d = tmp_path / "vmc"
+    d.mkdir()
+    lines = (EXAMPLES / "vmc_run.csv").read_text().splitlines()
+    (d / "vmc_a.csv").write_text("\n".join(lines[:401]) + "\n")
+    machine = EXAMPLES / "vmc_nominal.toml"
+    rows = fleet.diagnose_runs(d, machine, tmp_path / "out", network="best")
+    ref = tr.diagnose(tr.read_run(d / "vmc_a.csv"), tr.Machine.load(machine), network="best", progress=False)
+    assert rows[0].ok and rows[0].figures["baseline_rms"] == ref.report["baseline"]["rmse_um"]
+    rep = json.loads((tmp_path / "out" / "vmc_a" / "report.json").read_text())
+    assert rep["baseline_network"] == ref.report["baseline_network"]
+    with pytest.raises(tr.ThermerrError, match="network: `fast`"):
+        fleet.diagnose_runs(d, machine, tmp_path / "out2", network="fast")  # type: ignore[arg-type]
+    assert not (tmp_path / "out2").exists()

@@ -530,7 +530,8 @@ def cmd_fleet(args: argparse.Namespace) -> int:
     elif args.fleet_command == "evaluate":
         rows = fleet.evaluate_runs(args.model, args.runs, args.axis, out_dir=args.out, **sched)
     else:
-        rows = fleet.diagnose_runs(args.runs, args.machine, args.out, axis=args.axis, **sched)
+        rows = fleet.diagnose_runs(args.runs, args.machine, args.out, axis=args.axis, network=args.network,
+                                   **sched)
     failed = [r for r in rows if not r.ok]
     if args.json:
         print(json.dumps({"n_runs": len(rows), "n_failed": len(failed), "runs": [r.as_dict() for r in rows]},
@@ -756,6 +757,8 @@ def build_parser() -> argparse.ArgumentParser:
     fld.add_argument("runs", nargs="+", help=runs_help)
     fld.add_argument("--machine", required=True, help="nominal machine TOML")
     fld.add_argument("--axis", default=None, help="error axis (default: the machine's first)")
+    fld.add_argument("--network", choices=("recalibrate", "keep", "best"), default="recalibrate",
+                     help="the baseline's thermal network, as for thermerr diagnose (default recalibrate)")
     fld.add_argument("--out", required=True,
                      help="directory for OUT/<run>/report.* and fleet-summary.{json,csv}")
     for sp in (flf, fle, fld):

@@ -51,7 +51,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal, Union
 
 from ._io import write_atomic
-from .errors import MissingDependencyError, ThermerrError
+from .errors import MissingDependencyError, ParameterError, ThermerrError
 
 if TYPE_CHECKING:
     from .base import Estimator
@@ -251,14 +251,15 @@ def _evaluate_task(path: str, model_json: str, axis: str | None, nan: str) -> Ru
 
 
 def _diagnose_task(path: str, machine_toml: str, machine_file: str, axis: str | None,
-                   holdout_fraction: float, nan: str, out_dir: str) -> RunResult:
+                   holdout_fraction: float, nan: str, out_dir: str, network: str) -> RunResult:
     def work() -> tuple[str | None, dict[str, Any]]:
         from .run import read_run
         from .thermal import Machine, diagnose
 
         machine = Machine.from_toml(machine_toml, machine_file)
         run = read_run(path, nan=nan)  # type: ignore[arg-type]
-        d = diagnose(run, machine, axis=axis, holdout_fraction=holdout_fraction)
+        d = diagnose(run, machine, axis=axis, holdout_fraction=holdout_fraction, network=network,
+                     progress=False)
         target = Path(out_dir) / Path(path).stem
         d.write(target)
         b, e = d.report["baseline"], d.report["extended"]
@@ -457,6 +458,7 @@ def diagnose_runs(
     axis: str | None = None,
     holdout_fraction: float = 0.3,
     nan: Literal["error", "drop", "interpolate"] = "error",
+    network: Literal["recalibrate", "keep", "best"] = "recalibrate",
     scheduler: Scheduler = None,
     workers: int | None = None,
 ) -> list[RunResult]:
@@ -464,15 +466,18 @@ def diagnose_runs(
     TOML file) and write each report into ``out_dir/<stem>/`` (``report.json``, ``report.html``,
     ``calibrated.toml``, ``extended.toml``). Each run is calibrated on its first 70 % and scored
     on the rest (``holdout_fraction``). ``figures``: ``verdict``, ``column``, ``gain_pct``,
-    ``baseline_rms`` and ``extended_rms`` (held-out, µm). A machine file that cannot be read is
-    refused before any task starts.
+    ``baseline_rms`` and ``extended_rms`` (held-out, µm). ``network``: the baseline's network
+    rule, as for :func:`~thermerr_rs.thermal.diagnose`. A machine file that cannot be read, or a
+    rule that is not one of the three, is refused before any task starts.
     """
     from .thermal import Machine
 
     m = machine if isinstance(machine, Machine) else Machine.load(machine)
     source = str(machine) if isinstance(machine, (str, os.PathLike)) else f"{m.name}.toml"
     paths = run_paths(runs)
-    args = (m.to_toml(), source, axis, float(holdout_fraction), nan, str(out_dir))
+    if network not in ("recalibrate", "keep", "best"):
+        raise ParameterError(f"network: `{network}` is not one of recalibrate, keep, best")
+    args = (m.to_toml(), source, axis, float(holdout_fraction), nan, str(out_dir), network)
     results = _compute(_diagnose_task, paths, args, scheduler, workers, "diagnose")
     write_summary(results, out_dir)
     return results
