@@ -313,7 +313,9 @@ def write_report(
 IDENTIFIED_CAVEAT = (
     "not written by a person: a cause named here, or an unexplained remainder, may also be a "
     "shortcoming of the identified network (its node count, its links, its sensors); compare with "
-    "thermerr init --nodes N or a network written from the drawings")
+    "thermerr init --nodes N or a network written from the drawings, and with thermerr diagnose "
+    "--network best, which also tries the network exactly as identified (recalibrating it on one "
+    "axis can overfit a real run)")
 
 
 def render_axes_html(summary: dict[str, Any]) -> str:
