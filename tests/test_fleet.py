@@ -231,5 +231,5 @@ def test_diagnose_passes_the_network_rule_to_every_run(tmp_path):
     rep = json.loads((tmp_path / "out" / "vmc_a" / "report.json").read_text())
     assert rep["baseline_network"] == ref.report["baseline_network"]
     with pytest.raises(tr.ThermerrError, match="network: `fast`"):
-        fleet.diagnose_runs(d, machine, tmp_path / "out2", network="fast")  # type: ignore[arg-type]
+        fleet.diagnose_runs(d, machine, tmp_path / "out2", network="fast")
     assert not (tmp_path / "out2").exists()

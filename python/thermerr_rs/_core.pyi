@@ -10,6 +10,7 @@ _F64: TypeAlias = npt.NDArray[np.float64]
 
 __version__: str
 FORMAT_VERSION: int
+NETWORK_RULES: list[str]
 
 def read_model(text: str) -> tuple[str, int, str, Any]: ...
 def write_model(kind: str, header: str, inner: Any) -> str: ...

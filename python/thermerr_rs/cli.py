@@ -566,6 +566,8 @@ def cmd_examples(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from .thermal import NETWORK_RULES
+
     p = argparse.ArgumentParser(prog="thermerr", description="Machine-tool thermal error models and diagnosis.")
     p.add_argument("--version", action="version", version=f"thermerr_rs {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
@@ -712,7 +714,7 @@ def build_parser() -> argparse.ArgumentParser:
                     help="error axis; repeat for several (default: every drift entry of the machine). "
                          "Several axes write a summary report.json/report.html and <axis>.report.json, "
                          "<axis>.report.html, <axis>.calibrated.toml, <axis>.extended.toml")
-    dg.add_argument("--network", choices=("recalibrate", "keep", "best"), default="recalibrate",
+    dg.add_argument("--network", choices=NETWORK_RULES, default="recalibrate",
                     help="the baseline's thermal network: recalibrate it on the training rows and the axis "
                          "(default), keep it as the machine file gives it (only the start and the drift map "
                          "fitted: a network `thermerr init` identified from this run, or one you trust), or "
@@ -757,7 +759,7 @@ def build_parser() -> argparse.ArgumentParser:
     fld.add_argument("runs", nargs="+", help=runs_help)
     fld.add_argument("--machine", required=True, help="nominal machine TOML")
     fld.add_argument("--axis", default=None, help="error axis (default: the machine's first)")
-    fld.add_argument("--network", choices=("recalibrate", "keep", "best"), default="recalibrate",
+    fld.add_argument("--network", choices=NETWORK_RULES, default="recalibrate",
                      help="the baseline's thermal network, as for thermerr diagnose (default recalibrate)")
     fld.add_argument("--out", required=True,
                      help="directory for OUT/<run>/report.* and fleet-summary.{json,csv}")

@@ -458,7 +458,7 @@ def diagnose_runs(
     axis: str | None = None,
     holdout_fraction: float = 0.3,
     nan: Literal["error", "drop", "interpolate"] = "error",
-    network: Literal["recalibrate", "keep", "best"] = "recalibrate",
+    network: str = "recalibrate",
     scheduler: Scheduler = None,
     workers: int | None = None,
 ) -> list[RunResult]:
@@ -470,13 +470,13 @@ def diagnose_runs(
     rule, as for :func:`~thermerr_rs.thermal.diagnose`. A machine file that cannot be read, or a
     rule that is not one of the three, is refused before any task starts.
     """
-    from .thermal import Machine
+    from .thermal import NETWORK_RULES, Machine
 
     m = machine if isinstance(machine, Machine) else Machine.load(machine)
     source = str(machine) if isinstance(machine, (str, os.PathLike)) else f"{m.name}.toml"
     paths = run_paths(runs)
-    if network not in ("recalibrate", "keep", "best"):
-        raise ParameterError(f"network: `{network}` is not one of recalibrate, keep, best")
+    if network not in NETWORK_RULES:
+        raise ParameterError(f"network: `{network}` is not one of {', '.join(NETWORK_RULES)}")
     args = (m.to_toml(), source, axis, float(holdout_fraction), nan, str(out_dir), network)
     results = _compute(_diagnose_task, paths, args, scheduler, workers, "diagnose")
     write_summary(results, out_dir)

@@ -19,6 +19,9 @@ from ._arrays import F64
 from ._io import write_atomic
 from .run import Run
 
+#: The baseline network rules ``diagnose(network=...)`` takes (the core's list).
+NETWORK_RULES: tuple[str, ...] = tuple(_core.NETWORK_RULES)
+
 
 def _run_args(run: Run) -> tuple[str, F64, list[str], F64]:
     return run.source, run.time_s, list(run.names), run.matrix(list(run.names))

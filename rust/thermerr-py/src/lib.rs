@@ -164,6 +164,10 @@ pub(crate) fn vec_to_py(py: Python<'_>, v: Vec<f64>) -> Bound<'_, PyArray1<f64>>
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("FORMAT_VERSION", thermerr_core::artifact::FORMAT_VERSION)?;
+    m.add(
+        "NETWORK_RULES",
+        thermerr_core::thermal::diagnose::NetworkRule::ALL.map(|r| r.as_str()),
+    )?;
     artifact::register(m)?;
     run::register(m)?;
     linear::register(m)?;

@@ -2,13 +2,13 @@
 
 use super::rounds::{Accepted, Round, MIN_SHARE_OF_EXCESS};
 use super::verdict::{supported, Verdict};
-use super::{BaselineNetwork, Candidate, Holdout, NetworkRule};
+use super::{BaselineNetwork, Candidate, Holdout, NetworkRule, NetworkUsed};
 
 /// Which network the baseline has, when it is not the default (recalibrated on the axis).
 pub fn network(b: &BaselineNetwork, axis: &str) -> String {
     match (b.rule, b.recalibrated_rmse_um, b.kept_rmse_um) {
         (NetworkRule::Recalibrate, _, _) => String::new(),
-        (NetworkRule::Best, Some(r), Some(k)) if b.network == "kept" => format!(
+        (NetworkRule::Best, Some(r), Some(k)) if b.network == NetworkUsed::Kept => format!(
             " The baseline keeps the machine's network as given (only its start and the drift map \
              fitted): it leaves the smaller held-out residual of the error and the temperatures \
              together (noise-normalised) than the network recalibrated on this axis; on {axis} \

@@ -105,6 +105,12 @@ pub enum NetworkRule {
 }
 
 impl NetworkRule {
+    pub const ALL: [NetworkRule; 3] = [
+        NetworkRule::Recalibrate,
+        NetworkRule::Keep,
+        NetworkRule::Best,
+    ];
+
     pub fn as_str(self) -> &'static str {
         match self {
             NetworkRule::Recalibrate => "recalibrate",
@@ -117,24 +123,32 @@ impl NetworkRule {
 impl std::str::FromStr for NetworkRule {
     type Err = Error;
     fn from_str(s: &str) -> Result<Self> {
-        match s {
-            "recalibrate" => Ok(NetworkRule::Recalibrate),
-            "keep" => Ok(NetworkRule::Keep),
-            "best" => Ok(NetworkRule::Best),
-            other => Err(Error::param(
-                "network",
-                format!("`{other}` is not one of recalibrate, keep, best"),
-            )),
-        }
+        Self::ALL
+            .into_iter()
+            .find(|r| r.as_str() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = Self::ALL.iter().map(|r| r.as_str()).collect();
+                Error::param(
+                    "network",
+                    format!("`{s}` is not one of {}", names.join(", ")),
+                )
+            })
     }
+}
+
+/// The network a baseline ended with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum NetworkUsed {
+    Recalibrated,
+    Kept,
 }
 
 /// Which network the baseline has, and (rule `best`) both baselines' held-out figures.
 #[derive(Clone, Debug, Serialize)]
 pub struct BaselineNetwork {
     pub rule: NetworkRule,
-    /// `recalibrated` or `kept`.
-    pub network: &'static str,
+    pub network: NetworkUsed,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub recalibrated_rmse_um: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -180,20 +194,20 @@ fn baseline_of(
     Ok(match rule {
         NetworkRule::Recalibrate => {
             let (c, h) = recal()?;
-            (c, h, choice("recalibrated", None))
+            (c, h, choice(NetworkUsed::Recalibrated, None))
         }
         NetworkRule::Keep => {
             let (c, h) = kept()?;
-            (c, h, choice("kept", None))
+            (c, h, choice(NetworkUsed::Kept, None))
         }
         NetworkRule::Best => {
             let (r, k) = rayon::join(recal, kept);
             let ((rc, rh), (kc, kh)) = (r?, k?);
             if kh.joint_ssr < rh.joint_ssr {
-                let b = choice("kept", Some((&rh, &kh)));
+                let b = choice(NetworkUsed::Kept, Some((&rh, &kh)));
                 (kc, kh, b)
             } else {
-                let b = choice("recalibrated", Some((&rh, &kh)));
+                let b = choice(NetworkUsed::Recalibrated, Some((&rh, &kh)));
                 (rc, rh, b)
             }
         }
