@@ -316,3 +316,25 @@ fn calibration_refuses_a_bound_factor_that_freezes_it() {
         assert!(e.contains("bound_factor") && e.contains("> 1"), "{e}");
     }
 }
+
+#[test]
+fn the_first_rows_simulate_as_on_the_whole_run() {
+    // calibration simulates only the fitted rows (RunView::head): on them, the same numbers
+    let m = Machine::from_toml(TWO_NODES, "two.toml").unwrap();
+    let n = 60;
+    let t: Vec<f64> = (0..n).map(|k| k as f64 * 60.0).collect();
+    let rpm: Vec<f64> = (0..n).map(|k| [0.0, 3000.0, 6000.0][(k / 7) % 3]).collect();
+    let hot: Vec<f64> = (0..n).map(|k| 20.0 + 0.01 * k as f64).collect();
+    let r = run(vec![
+        ("time_s", t),
+        ("T_hot", hot),
+        ("U_rpm", rpm),
+        ("E_x", vec![0.0; n]),
+    ]);
+    let whole = RunView::new(&r);
+    let full = simulate(&m, &whole, &Init::FirstReading).unwrap();
+    let head = simulate(&m, &whole.head(41), &Init::FirstReading).unwrap();
+    assert_eq!(head.temps.len(), 41 * 2);
+    assert_eq!(head.temps[..], full.temps[..41 * 2]);
+    assert_eq!(head.drift[0].1[..], full.drift[0].1[..41]);
+}

@@ -466,6 +466,8 @@ pub fn calibrate(
 ) -> Result<Calibration> {
     opts.check()?;
     let rows = opts.fit_rows.unwrap_or(run.len()).min(run.len());
+    // the held-out rows are neither fitted nor needed to simulate the fitted ones
+    let run = &run.head(rows);
     let k = fit_thinning(run.time, rows);
     if k <= 1 {
         return calibrate_all_rows(m, run, opts, free);

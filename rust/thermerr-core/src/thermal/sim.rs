@@ -67,6 +67,18 @@ impl<'a> RunView<'a> {
     pub fn is_empty(&self) -> bool {
         self.time.is_empty()
     }
+
+    /// The first `rows` rows (all of them when the run is shorter). A simulation is causal and
+    /// its terms are taken against the first row, so on these rows it gives what it gives on the
+    /// whole run.
+    pub fn head(&self, rows: usize) -> RunView<'a> {
+        let rows = rows.min(self.len());
+        RunView {
+            source: self.source.clone(),
+            time: &self.time[..rows],
+            cols: self.cols.iter().map(|(n, c)| (*n, &c[..rows])).collect(),
+        }
+    }
 }
 
 /// Simulated node temperatures, sensor readings and drift axes.
