@@ -1,5 +1,6 @@
 """The baseline's network rule (`network=` / `thermerr diagnose --network`): recalibrated on the
-axis (the default), kept as the machine file gives it, or the better of the two held out.
+axis (the default), kept as the machine file gives it, the better of the two held out, or one
+network shared by every axis (calibrated on the temperatures alone).
 
 Why the rule exists: on a real 46-h run, recalibrating an identified network on one axis fitted
 the training rows better while the held-out error grew (docs/machine-model.md, "A real measured
@@ -11,6 +12,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 import thermerr_rs as tr
@@ -77,7 +79,7 @@ def test_best_keeps_the_baseline_with_the_smaller_held_out_residual(case):
 
 def test_a_wrong_rule_is_one_clear_error(case, tmp_path, capsys):
     train, m, test, _ = case
-    with pytest.raises(ThermerrError, match="network.*`fast` is not one of recalibrate, keep, best"):
+    with pytest.raises(ThermerrError, match="network.*`fast` is not one of recalibrate, keep, best, shared"):
         diagnose(train, m, test, network="fast", progress=False)
     run_csv, toml = _files(case, tmp_path)
     with pytest.raises(SystemExit) as e:
@@ -106,3 +108,42 @@ def test_the_summary_of_several_axes_names_each_baseline_network(case, tmp_path)
     page = (multi.write(tmp_path / "d").parent / "report.html").read_text()
     assert "<th>baseline network</th>" in page
     assert all(f"<td>{v}</td>" in page for v in chosen.values())
+
+
+@pytest.fixture(scope="module")
+def shop():
+    """Five probes on one machine, a room coupling hidden on E_ch3 (12 h at 60 s)."""
+    c = syn.make_shop_case(2, hours=12.0, dt=60.0, hidden={"E_ch3": "ambient_coupling"})
+    return c, Machine.from_toml(c.nominal_toml())
+
+
+def test_shared_is_one_network_for_every_axis(shop):
+    from thermerr_rs.thermal import diagnose_axes
+
+    c, m = shop
+    run = tr.Run.from_frame(c.train, source="shop.csv")
+    multi = diagnose_axes(run, m, network="shared", progress=False)
+    nets = {a: _thermal(multi[a].calibrated) for a in multi.axes}
+    first = nets[multi.axes[0]]
+    assert all(v == pytest.approx(first, rel=1e-12) for v in nets.values()), nets
+    # calibrated, not the file's
+    assert first != pytest.approx(_thermal(m), rel=1e-3)
+    assert all(multi[a].report["baseline_network"] == {"rule": "shared", "network": "shared"} for a in multi.axes)
+    assert "one network, calibrated once on the temperatures alone" in multi[multi.axes[0]].evidence
+    # a single axis's diagnosis under `shared` has the same network
+    one = diagnose(run, m, axis="E_ch1", network="shared", progress=False)
+    assert _thermal(one.calibrated) == pytest.approx(first, rel=1e-12)
+
+
+def test_the_shared_network_does_not_bend_to_an_axis(shop):
+    """Calibrated on the temperatures alone: a probe that reads something else entirely (here a
+    ramp of 50 µm added to E_ch3) leaves the network every axis keeps as it was; the network
+    recalibrated on that axis moves."""
+    c, m = shop
+    bent = dict(c.train)
+    bent["E_ch3"] = np.asarray(bent["E_ch3"]) + np.linspace(0.0, 50.0, len(bent["E_ch3"]))
+    runs = [tr.Run.from_frame(f, source="shop.csv") for f in (c.train, bent)]
+    shared = [_thermal(diagnose(r, m, axis="E_ch3", network="shared", progress=False).calibrated) for r in runs]
+    assert shared[0] == pytest.approx(shared[1], rel=1e-12)
+    recal = [_thermal(diagnose(r, m, axis="E_ch3", progress=False).calibrated) for r in runs]
+    assert recal[0] != pytest.approx(recal[1], rel=1e-3)

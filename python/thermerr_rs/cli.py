@@ -719,7 +719,8 @@ def build_parser() -> argparse.ArgumentParser:
                          "(default), keep it as the machine file gives it (only the start and the drift map "
                          "fitted: a network `thermerr init` identified from this run, or one you trust), or "
                          "best: both, and the one with the smaller held-out residual of the error and the "
-                         "temperatures together (noise-normalised)")
+                         "temperatures together (noise-normalised), or shared: one network for every axis, "
+                         "calibrated once on the temperatures alone, each axis fitting its start and drift map")
     common(dg)
     dg.set_defaults(func=cmd_diagnose)
 

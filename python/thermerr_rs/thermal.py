@@ -260,10 +260,12 @@ def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: st
     ``holdout_fraction`` of ``run``. ``network``: the baseline's thermal network —
     ``"recalibrate"`` (default: every capacity, conductance and source fitted on the training rows
     and this axis), ``"keep"`` (the machine's network as given, only the initial offsets and the
-    drift map fitted: a network identified from this very run, or one you trust) or ``"best"``
+    drift map fitted: a network identified from this very run, or one you trust), ``"best"``
     (both, and the one with the smaller held-out residual of the error and the temperatures
     together, noise-normalised; ``report["baseline_network"]`` gives
-    both held-out RMS). Candidates still refit the network with their extension.
+    both held-out RMS) or ``"shared"`` (the machine's one network, calibrated on the training
+    rows and the temperatures alone, then kept with this axis's start and drift map fitted).
+    Candidates still refit the network with their extension.
     ``progress``: a bar of the calibrations done (default: when stderr is a terminal).
     """
     with _progress_bar(progress, "diagnosis") as cb:
@@ -341,7 +343,8 @@ def diagnose_axes(run: Run, machine: Machine, holdout: Run | None = None, *, axe
     """:func:`diagnose` for several error axes at once (default: every drift entry of the
     machine), in parallel. Each axis is diagnosed on the shared temperatures and its own error
     column, with its own calibration of the network and its own causes and remainder.
-    ``network``: as for :func:`diagnose`, per axis.
+    ``network``: as for :func:`diagnose`, per axis; under ``"shared"`` the one network is
+    calibrated once (on the temperatures alone) and every axis keeps it.
     ``progress``: one bar of every axis's calibrations (default: when stderr is a terminal)."""
     with _progress_bar(progress, "diagnosis of the axes") as cb:
         ds = machine._inner.diagnose_axes(*_run_args(run), _run_args(holdout) if holdout is not None else None,

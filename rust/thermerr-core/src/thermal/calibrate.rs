@@ -70,6 +70,9 @@ pub struct CalibrationOptions {
     /// Also search the machine's thermal parameters (false: only extension parameters and the
     /// linear drift terms, the thermal network kept as given).
     pub thermal: bool,
+    /// Fit the error axis with the temperatures (false: the search sees the temperatures alone,
+    /// and the axis's drift map is solved once on the network it ends with).
+    pub fit_error: bool,
 }
 
 impl Default for CalibrationOptions {
@@ -85,6 +88,7 @@ impl Default for CalibrationOptions {
             fit_rows: None,
             max_iter: 100,
             thermal: true,
+            fit_error: true,
         }
     }
 }
@@ -393,9 +397,10 @@ pub fn evaluate(
     Ok((fitted, sim, r))
 }
 
-/// The normalised data residuals of `m` over `rows` (sensors, then the axis' error), the drift
-/// coefficients re-solved on `rows`: the third part of what [`evaluate`] returns, without
+/// The normalised data residuals of `m` over `rows` (sensors, then, with `fit_error`, the
+/// axis' error), the drift coefficients re-solved on `rows`: the third part of what [`evaluate`] returns, without
 /// building the simulation's readings and every axis' drift (the search's inner loop).
+#[allow(clippy::too_many_arguments)]
 fn residuals(
     m: &Machine,
     init: &[f64],
@@ -404,9 +409,13 @@ fn residuals(
     rows: usize,
     sigma_t: f64,
     sigma_e: f64,
+    fit_error: bool,
 ) -> Result<Vec<f64>> {
     let temps = simulate_nodes(m, run, &Init::Offsets(init.to_vec()))?;
-    let (_, e) = fit_drift(m, tg.axis_index, run, &temps, tg.measured_e, rows, sigma_e)?;
+    let e = match fit_error {
+        true => fit_drift(m, tg.axis_index, run, &temps, tg.measured_e, rows, sigma_e)?.1,
+        false => Vec::new(),
+    };
     Ok(normalised(m, run, tg, &temps, &e, rows, sigma_t, sigma_e))
 }
 
@@ -521,7 +530,7 @@ fn calibrate_all_rows(
     };
     let residual = |x: &[f64]| -> Result<Vec<f64>> {
         let (mm, init) = apply(m, &free, x);
-        let mut r = residuals(&mm, &init, run, &tg, rows, sigma_t, sigma_e)?;
+        let mut r = residuals(&mm, &init, run, &tg, rows, sigma_t, sigma_e, opts.fit_error)?;
         for (fp, v) in free.iter().zip(x) {
             if let Some((c, w)) = fp.prior {
                 r.push((v - c) / w);

@@ -8,6 +8,10 @@ use super::{BaselineNetwork, Candidate, Holdout, NetworkRule, NetworkUsed};
 pub fn network(b: &BaselineNetwork, axis: &str) -> String {
     match (b.rule, b.recalibrated_rmse_um, b.kept_rmse_um) {
         (NetworkRule::Recalibrate, _, _) => String::new(),
+        (NetworkRule::Shared, _, _) => " The baseline's network is the machine's one network, \
+             calibrated once on the temperatures alone; only the start and the drift map of this \
+             axis are fitted to it."
+            .to_string(),
         (NetworkRule::Best, Some(r), Some(k)) if b.network == NetworkUsed::Kept => format!(
             " The baseline keeps the machine's network as given (only its start and the drift map \
              fitted): it leaves the smaller held-out residual of the error and the temperatures \

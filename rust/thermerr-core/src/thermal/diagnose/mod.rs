@@ -102,13 +102,17 @@ pub enum NetworkRule {
     /// Both, and the one whose held-out residual (error and temperatures, noise-normalised) is
     /// the smaller.
     Best,
+    /// One network for the machine: calibrated once on the training rows and the temperatures
+    /// alone, then kept by every axis (only its start and drift map fitted).
+    Shared,
 }
 
 impl NetworkRule {
-    pub const ALL: [NetworkRule; 3] = [
+    pub const ALL: [NetworkRule; 4] = [
         NetworkRule::Recalibrate,
         NetworkRule::Keep,
         NetworkRule::Best,
+        NetworkRule::Shared,
     ];
 
     pub fn as_str(self) -> &'static str {
@@ -116,6 +120,7 @@ impl NetworkRule {
             NetworkRule::Recalibrate => "recalibrate",
             NetworkRule::Keep => "keep",
             NetworkRule::Best => "best",
+            NetworkRule::Shared => "shared",
         }
     }
 }
@@ -142,6 +147,24 @@ impl std::str::FromStr for NetworkRule {
 pub enum NetworkUsed {
     Recalibrated,
     Kept,
+    Shared,
+}
+
+/// The machine's one network (rule `shared`): calibrated on `train`'s first `split` rows and the
+/// temperatures alone, so that no axis's own effect (a lag, a room coupling, a growth) bends
+/// the network every axis then keeps.
+fn shared_network(
+    m: &Machine,
+    train: &RunView<'_>,
+    split: usize,
+    copts: &CalibrationOptions,
+) -> Result<Machine> {
+    let o = CalibrationOptions {
+        fit_error: false,
+        fit_rows: Some(split),
+        ..copts.clone()
+    };
+    Ok(calibrate(m, train, &o, None)?.machine)
 }
 
 /// Which network the baseline has, and (rule `best`) both baselines' held-out figures.
@@ -161,9 +184,11 @@ pub struct BaselineNetwork {
     pub kept_joint_ssr: Option<f64>,
 }
 
-/// The baseline under `rule`, and its held-out figures.
+/// The baseline under `rule`, and its held-out figures. `shared`: the machine's one network
+/// (rule `shared`), calibrated here when not given.
 fn baseline_of(
     m: &Machine,
+    shared: Option<&Machine>,
     train: &RunView<'_>,
     copts: &CalibrationOptions,
     held: &HeldOut<'_, '_>,
@@ -174,7 +199,7 @@ fn baseline_of(
         let h = score::holdout(&c, held)?;
         Ok((c, h))
     };
-    let kept = || -> Result<(Calibration, Holdout)> {
+    let kept_of = |m: &Machine| -> Result<(Calibration, Holdout)> {
         let o = CalibrationOptions {
             thermal: false,
             ..copts.clone()
@@ -183,6 +208,7 @@ fn baseline_of(
         let h = score::holdout(&c, held)?;
         Ok((c, h))
     };
+    let kept = || kept_of(m);
     let choice = |network, both: Option<(&Holdout, &Holdout)>| BaselineNetwork {
         rule,
         network,
@@ -199,6 +225,16 @@ fn baseline_of(
         NetworkRule::Keep => {
             let (c, h) = kept()?;
             (c, h, choice(NetworkUsed::Kept, None))
+        }
+        NetworkRule::Shared => {
+            let (c, h) = match shared {
+                Some(s) => kept_of(s)?,
+                None => {
+                    let rows = copts.fit_rows.unwrap_or(train.len());
+                    kept_of(&shared_network(m, train, rows, copts)?)?
+                }
+            };
+            (c, h, choice(NetworkUsed::Shared, None))
         }
         NetworkRule::Best => {
             let (r, k) = rayon::join(recal, kept);
@@ -525,6 +561,31 @@ pub fn diagnose(
     hold: Option<&RunView<'_>>,
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis> {
+    diagnose_on(m, None, train, hold, opts)
+}
+
+/// The training rows of a diagnosis: all of `train` when a separate held-out run is given,
+/// else the first `1 - holdout_fraction` of it.
+fn split_of(train: &RunView<'_>, separate: bool, opts: &DiagnoseOptions) -> Result<usize> {
+    let n = train.len();
+    if separate {
+        return Ok(n);
+    }
+    if !(0.05..=0.8).contains(&opts.holdout_fraction) {
+        return Err(Error::param("holdout_fraction", "must be within 0.05..0.8"));
+    }
+    Ok(((n as f64) * (1.0 - opts.holdout_fraction)).round() as usize)
+}
+
+/// [`diagnose`], with the machine's one network given (rule `shared`) when it was calibrated
+/// already for another axis.
+fn diagnose_on(
+    m: &Machine,
+    shared: Option<&Machine>,
+    train: &RunView<'_>,
+    hold: Option<&RunView<'_>>,
+    opts: &DiagnoseOptions,
+) -> Result<Diagnosis> {
     let axis = match &opts.axis {
         Some(a) => a.clone(),
         None => m
@@ -540,14 +601,7 @@ pub fn diagnose(
         )
     })?;
     let n = train.len();
-    let split = if hold.is_some() {
-        n
-    } else {
-        if !(0.05..=0.8).contains(&opts.holdout_fraction) {
-            return Err(Error::param("holdout_fraction", "must be within 0.05..0.8"));
-        }
-        ((n as f64) * (1.0 - opts.holdout_fraction)).round() as usize
-    };
+    let split = split_of(train, hold.is_some(), opts)?;
     let held_rows = match hold {
         Some(h) => h.len(),
         None => n - split,
@@ -573,7 +627,7 @@ pub fn diagnose(
     progress::stage(pg, 1);
     progress::plan(pg, 1);
     let (baseline, base_hold, baseline_network) =
-        baseline_of(m, train, &copts, &held, opts.network)?;
+        baseline_of(m, shared, train, &copts, &held, opts.network)?;
     progress::step(pg);
     let base = Baseline::new(
         &baseline,
@@ -718,13 +772,28 @@ pub fn diagnose_axes(
             ));
         }
     }
+    let shared = match (opts.network, axes.first()) {
+        (NetworkRule::Shared, Some(a)) => {
+            let split = split_of(train, hold.is_some(), opts)?;
+            let copts = CalibrationOptions {
+                axis: a.clone(),
+                ..opts.calibration.clone()
+            };
+            progress::stage(opts.progress.as_deref(), 1);
+            progress::plan(opts.progress.as_deref(), 1);
+            let s = shared_network(m, train, split, &copts)?;
+            progress::step(opts.progress.as_deref());
+            Some(s)
+        }
+        _ => None,
+    };
     axes.par_iter()
         .map(|a| {
             let o = DiagnoseOptions {
                 axis: Some(a.clone()),
                 ..opts.clone()
             };
-            diagnose(m, train, hold, &o)
+            diagnose_on(m, shared.as_ref(), train, hold, &o)
         })
         .collect()
 }
