@@ -60,10 +60,16 @@ pub fn named(cands: &[Candidate], i: usize, base: &Holdout, axis: &str) -> Strin
         .map(|(k, v)| format!("{k} = {v:.4}"))
         .collect();
     let what = place(c.cause, c.column.as_deref(), c.node.as_deref());
-    let sensor = c
-        .sensor_gain_pct
-        .map(|g| format!(" and the held-out residual of that sensor by {g:.0} %"))
-        .unwrap_or_default();
+    let sensor = match c.sensor_gain_pct {
+        Some(g) if c.holdout.rmse_um < base.rmse_um => {
+            format!(" and the held-out residual of that sensor by {g:.0} %")
+        }
+        Some(g) => format!(
+            ", but cuts the held-out residual of that sensor by {g:.0} % (the drifting reading \
+             had stood in for another effect on {axis}, which the later rounds look for)"
+        ),
+        None => String::new(),
+    };
     let among = if i == 0 {
         format!("{} candidate extensions", cands.len())
     } else {
