@@ -461,9 +461,14 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
+#: the diagnosis's stages in the order they run (report.json keeps them in key order)
+_STAGES = ("baseline", "round_1", "later_rounds_and_check")
+
+
 def _stage_times(report: dict[str, Any]) -> str:
     st = report.get("stage_s", {})
-    return ", ".join(f"{k.replace('_', ' ')} {v:.1f} s" for k, v in st.items())
+    order = sorted(st, key=lambda k: (_STAGES.index(k) if k in _STAGES else len(_STAGES), k))
+    return ", ".join(f"{k.replace('_', ' ')} {st[k]:.1f} s" for k in order)
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:

@@ -74,7 +74,7 @@ pub fn named(cands: &[Candidate], i: usize, base: &Holdout, axis: &str) -> Strin
         format!("{} candidate extensions", cands.len())
     } else {
         format!(
-            "the {} of {} candidate extensions that lower the held-out error and improve the training fit",
+            "the {} of {} candidate extensions that meet the rule for naming a cause",
             cands.iter().filter(|x| supported(x)).count(),
             cands.len()
         )
