@@ -243,7 +243,7 @@ mod tests {
         ];
         let s = named(&cands, 1, &base, "E_z");
         assert!(
-            s.contains("the most of the 1 of 2 candidate extensions that lower"),
+            s.contains("the most of the 1 of 2 candidate extensions that meet the rule"),
             "{s}"
         );
     }
