@@ -147,3 +147,21 @@ def test_the_shared_network_does_not_bend_to_an_axis(shop):
     assert shared[0] == pytest.approx(shared[1], rel=1e-12)
     recal = [_thermal(diagnose(r, m, axis="E_ch3", progress=False).calibrated) for r in runs]
     assert recal[0] != pytest.approx(recal[1], rel=1e-3)
+
+
+def test_shared_needs_a_sensed_node(case, tmp_path, capsys):
+    """No node has a `sensor`: there is no temperature to calibrate one network on; one clear
+    line, exit 2, nothing written."""
+    train, m, test, c = case
+    text = "\n".join(line for line in m.to_toml().splitlines() if not line.startswith("sensor"))
+    blind = Machine.from_toml(text)
+    with pytest.raises(ThermerrError, match="network.*`shared`.*none of its nodes a `sensor`"):
+        diagnose(train, blind, test, network="shared", progress=False)
+    run_csv, toml = tmp_path / "run.csv", tmp_path / "m.toml"
+    syn.write_run_csv(run_csv, c.train)
+    toml.write_text(text)
+    assert main(["diagnose", str(run_csv), "--machine", str(toml), "--out", str(tmp_path / "d"),
+                 "--network", "shared", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "`shared`" in err[0], err
+    assert not (tmp_path / "d").exists()

@@ -159,6 +159,17 @@ fn shared_network(
     split: usize,
     copts: &CalibrationOptions,
 ) -> Result<Machine> {
+    if !m
+        .nodes
+        .iter()
+        .any(|n| n.sensor.is_some() && n.boundary.is_none())
+    {
+        return Err(Error::param(
+            "network",
+            "`shared` calibrates the network on its sensed temperatures, and the machine gives \
+             none of its nodes a `sensor` (use recalibrate or keep)",
+        ));
+    }
     let o = CalibrationOptions {
         fit_error: false,
         fit_rows: Some(split),
