@@ -150,20 +150,11 @@ pub enum NetworkUsed {
     Shared,
 }
 
-/// The machine's one network (rule `shared`): calibrated on `train`'s first `split` rows and the
-/// temperatures alone, so that no axis's own effect (a lag, a room coupling, a growth) bends
-/// the network every axis then keeps.
-fn shared_network(
-    m: &Machine,
-    train: &RunView<'_>,
-    split: usize,
-    copts: &CalibrationOptions,
-) -> Result<Machine> {
-    if !m
-        .nodes
-        .iter()
-        .any(|n| n.sensor.is_some() && n.boundary.is_none())
-    {
+/// The machine's one network (rule `shared`): calibrated on the training rows (`copts.fit_rows`)
+/// and the temperatures alone, so that no axis's own effect (a lag, a room coupling, a growth)
+/// bends the network every axis then keeps.
+fn shared_network(m: &Machine, train: &RunView<'_>, copts: &CalibrationOptions) -> Result<Machine> {
+    if targets(m, train, &copts.axis)?.sensors.is_empty() {
         return Err(Error::param(
             "network",
             "`shared` calibrates the network on its sensed temperatures, and the machine gives \
@@ -172,7 +163,6 @@ fn shared_network(
     }
     let o = CalibrationOptions {
         fit_error: false,
-        fit_rows: Some(split),
         ..copts.clone()
     };
     Ok(calibrate(m, train, &o, None)?.machine)
@@ -240,10 +230,7 @@ fn baseline_of(
         NetworkRule::Shared => {
             let (c, h) = match shared {
                 Some(s) => kept_of(s)?,
-                None => {
-                    let rows = copts.fit_rows.unwrap_or(train.len());
-                    kept_of(&shared_network(m, train, rows, copts)?)?
-                }
+                None => kept_of(&shared_network(m, train, copts)?)?,
             };
             (c, h, choice(NetworkUsed::Shared, None))
         }
@@ -785,14 +772,14 @@ pub fn diagnose_axes(
     }
     let shared = match (opts.network, axes.first()) {
         (NetworkRule::Shared, Some(a)) => {
-            let split = split_of(train, hold.is_some(), opts)?;
             let copts = CalibrationOptions {
                 axis: a.clone(),
+                fit_rows: Some(split_of(train, hold.is_some(), opts)?),
                 ..opts.calibration.clone()
             };
             progress::stage(opts.progress.as_deref(), 1);
             progress::plan(opts.progress.as_deref(), 1);
-            let s = shared_network(m, train, split, &copts)?;
+            let s = shared_network(m, train, &copts)?;
             progress::step(opts.progress.as_deref());
             Some(s)
         }
