@@ -207,6 +207,14 @@ class Diagnosis:
     def __str__(self) -> str:
         return self._text() + (_identified_line() if self.report.get("identified") else "")
 
+    @property
+    def baseline_unique(self) -> bool:
+        """False when the recalibrated baseline, calibrated again from a second start (every network
+        parameter 25 % off the file's values), fits the training rows as well or better and holds out
+        differently (``report["baseline_network"]["second_start"]``); True otherwise, and for a kept
+        or shared network (one solution)."""
+        return bool(self.report["baseline_network"].get("second_start", {}).get("unique", True))
+
     def _text(self) -> str:
         b, e = self.report["baseline"], self.report["extended"]
         col = f" (column {self.column})" if self.column else ""
@@ -315,6 +323,7 @@ class AxesDiagnosis:
             "remainder_um": {a: d.remainder_um for a, d in self.by_axis.items()},
             "baseline_rmse_um": {a: d.report["baseline"]["rmse_um"] for a, d in self.by_axis.items()},
             "baseline_network": {a: d.report["baseline_network"]["network"] for a, d in self.by_axis.items()},
+            "baseline_unique": {a: d.baseline_unique for a, d in self.by_axis.items()},
             "extended_rmse_um": {a: d.report["extended"]["rmse_um"] for a, d in self.by_axis.items()},
             "reports": {a: f"{a}.report.json" for a in self.by_axis},
             "identified": any(d.report["identified"] for d in self.by_axis.values()),
@@ -333,6 +342,11 @@ class AxesDiagnosis:
 
     def __str__(self) -> str:
         text = "\n\n".join(f"== {a} ==\n{d._text()}" for a, d in self.by_axis.items())
+        moved = [a for a, d in self.by_axis.items() if not d.baseline_unique]
+        if moved:
+            text += (f"\nnote: the recalibrated baseline is not unique on {', '.join(moved)}: from a second start "
+                     "it fits the training rows as well or better and holds out differently (see each axis's "
+                     "evidence); --network best or keep gives a baseline with one solution")
         return text + (_identified_line() if self.report["identified"] else "")
 
 

@@ -2,7 +2,7 @@
 
 use super::rounds::{Accepted, Round, MIN_SHARE_OF_EXCESS};
 use super::verdict::{supported, Verdict};
-use super::{BaselineNetwork, Candidate, Holdout, NetworkRule, NetworkUsed};
+use super::{BaselineNetwork, Candidate, Holdout, NetworkRule, NetworkUsed, SECOND_START_FACTOR};
 
 /// Which network the baseline has, when it is not the default (recalibrated on the axis).
 pub fn network(b: &BaselineNetwork, axis: &str) -> String {
@@ -26,6 +26,25 @@ pub fn network(b: &BaselineNetwork, axis: &str) -> String {
         _ => " The baseline keeps the machine's network as given (only its start and the drift \
               map fitted)."
             .to_string(),
+    }
+}
+
+/// What a second start of the recalibrated baseline says, when it ends elsewhere held out.
+pub fn second_start(b: &BaselineNetwork, first: &Holdout, axis: &str) -> String {
+    match &b.second_start {
+        Some(s) if !s.unique => format!(
+            " The baseline's calibration is not unique on this run: started with every network \
+             parameter {:.0} % off the machine file's values, it fits the training rows as well or \
+             better (SSR {:.2}x) and holds out {:.2} µm on {axis} against {:.2} µm. The training \
+             rows do not pin the network down, and what is named here was found from the file's \
+             values; `--network keep` or `best` (for a network identified from this run, or one \
+             you trust) gives a baseline with one solution.",
+            100.0 * (SECOND_START_FACTOR - 1.0),
+            s.training_ssr_ratio,
+            s.rmse_um,
+            first.rmse_um,
+        ),
+        _ => String::new(),
     }
 }
 

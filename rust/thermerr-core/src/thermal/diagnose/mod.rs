@@ -43,7 +43,9 @@ pub use cause::Cause;
 pub use rounds::{Accepted, Round, MAX_ROUNDS, MIN_SHARE_OF_EXCESS};
 pub use verdict::Verdict;
 
-use super::calibrate::{calibrate, evaluate, targets, Calibration, CalibrationOptions, FreeParam};
+use super::calibrate::{
+    calibrate, default_params, evaluate, targets, Calibration, CalibrationOptions, FreeParam,
+};
 use super::machine::{Identified, Machine};
 use super::sim::RunView;
 use crate::error::{Error, Result};
@@ -183,6 +185,59 @@ pub struct BaselineNetwork {
     pub recalibrated_joint_ssr: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub kept_joint_ssr: Option<f64>,
+    /// A recalibrated baseline, calibrated again from a second start: whether the search ends at
+    /// the same held-out figures (absent when the baseline keeps a network: its fit is linear
+    /// but for the start, and has one solution).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub second_start: Option<StartCheck>,
+}
+
+/// Every network parameter of the second start is this factor off the machine file's value,
+/// up and down in turn (capacity up, its conductance to the room down: the node's time constant
+/// 1.56 times the file's), inside the same bounds and priors as the first start.
+pub const SECOND_START_FACTOR: f64 = 1.25;
+/// The two starts' held-out RMS may differ by this share of the first's (or by the probe noise,
+/// if that is more) and still count as one solution.
+pub const START_SPREAD: f64 = 0.10;
+
+/// The recalibrated baseline from a second start ([`SECOND_START_FACTOR`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct StartCheck {
+    /// Held-out RMS of the error axis from the second start (µm).
+    pub rmse_um: f64,
+    /// Its normalised training SSR over the first start's (below 1: the second fits the
+    /// training rows better).
+    pub training_ssr_ratio: f64,
+    /// No second solution: the second start fits the training rows worse than the first, or
+    /// ends within [`START_SPREAD`] (or the probe noise) of it held out. `false`: the training
+    /// rows fit as well or better from the second start and the held-out figures differ, so the
+    /// training rows do not pin the network down.
+    pub unique: bool,
+}
+
+impl StartCheck {
+    fn of(first: (&Calibration, &Holdout), second: (&Calibration, &Holdout)) -> Self {
+        let (r1, r2) = (first.1.rmse_um, second.1.rmse_um);
+        let tol = (START_SPREAD * r1).max(first.0.sigma_e);
+        let ratio = second.0.ssr / first.0.ssr.max(f64::MIN_POSITIVE);
+        StartCheck {
+            rmse_um: r2,
+            training_ssr_ratio: ratio,
+            unique: ratio > 1.0 || (r2 - r1).abs() <= tol,
+        }
+    }
+}
+
+/// The free parameters of a recalibration started [`SECOND_START_FACTOR`] off the file's values.
+fn second_start(m: &Machine, copts: &CalibrationOptions) -> Vec<FreeParam> {
+    let shift = SECOND_START_FACTOR.ln();
+    let mut up = true;
+    let mut free = default_params(m, copts);
+    for f in free.iter_mut().filter(|f| f.log) {
+        f.start = (f.start + if up { shift } else { -shift }).clamp(f.lo, f.hi);
+        up = !up;
+    }
+    free
 }
 
 /// The baseline under `rule`, and its held-out figures. `shared`: the machine's one network
@@ -195,10 +250,15 @@ fn baseline_of(
     held: &HeldOut<'_, '_>,
     rule: NetworkRule,
 ) -> Result<(Calibration, Holdout, BaselineNetwork)> {
-    let recal = || -> Result<(Calibration, Holdout)> {
-        let c = calibrate(m, train, copts, None)?;
+    let recal_from = |free: Option<Vec<FreeParam>>| -> Result<(Calibration, Holdout)> {
+        let c = calibrate(m, train, copts, free)?;
         let h = score::holdout(&c, held)?;
         Ok((c, h))
+    };
+    let recal = || recal_from(None);
+    let check = |c: &Calibration, h: &Holdout| -> Result<StartCheck> {
+        let (c2, h2) = recal_from(Some(second_start(m, copts)))?;
+        Ok(StartCheck::of((c, h), (&c2, &h2)))
     };
     let kept_of = |m: &Machine| -> Result<(Calibration, Holdout)> {
         let o = CalibrationOptions {
@@ -217,11 +277,17 @@ fn baseline_of(
         kept_rmse_um: both.map(|(_, k)| k.rmse_um),
         recalibrated_joint_ssr: both.map(|(r, _)| r.joint_ssr),
         kept_joint_ssr: both.map(|(_, k)| k.joint_ssr),
+        second_start: None,
     };
     Ok(match rule {
         NetworkRule::Recalibrate => {
-            let (c, h) = recal()?;
-            (c, h, choice(NetworkUsed::Recalibrated, None))
+            let (first, second) = rayon::join(recal, || recal_from(Some(second_start(m, copts))));
+            let ((c, h), (c2, h2)) = (first?, second?);
+            let b = BaselineNetwork {
+                second_start: Some(StartCheck::of((&c, &h), (&c2, &h2))),
+                ..choice(NetworkUsed::Recalibrated, None)
+            };
+            (c, h, b)
         }
         NetworkRule::Keep => {
             let (c, h) = kept()?;
@@ -241,7 +307,10 @@ fn baseline_of(
                 let b = choice(NetworkUsed::Kept, Some((&rh, &kh)));
                 (kc, kh, b)
             } else {
-                let b = choice(NetworkUsed::Recalibrated, Some((&rh, &kh)));
+                let b = BaselineNetwork {
+                    second_start: Some(check(&rc, &rh)?),
+                    ..choice(NetworkUsed::Recalibrated, Some((&rh, &kh)))
+                };
                 (rc, rh, b)
             }
         }
@@ -701,6 +770,11 @@ fn diagnose_on(
         opts.min_score,
     ));
     evidence.push_str(&evidence::network(&baseline_network, &axis));
+    evidence.push_str(&evidence::second_start(
+        &baseline_network,
+        &base_hold,
+        &axis,
+    ));
     let (holdout_label, holdout_time, holdout_measured) = match hold {
         Some(h) => (
             format!("the separate run {}", h.source),
@@ -848,6 +922,54 @@ pub(crate) mod tests {
             },
             spec: None,
         }
+    }
+
+    #[test]
+    fn the_second_start_moves_every_network_parameter_up_and_down_in_turn() {
+        let m = Machine::from_toml(
+            "name = \"two\"\nambient = 20.0\n[[nodes]]\nname = \"a\"\ncapacity_j_per_k = 1000.0\nambient_w_per_k = 2.0\nsensor = \"T_a\"\n[[nodes]]\nname = \"b\"\ncapacity_j_per_k = 5000.0\nambient_w_per_k = 4.0\n[[links]]\nbetween = [\"a\", \"b\"]\nw_per_k = 3.0\n[[drift]]\naxis = \"E_z\"\num_per_k = { a = 1.0 }\n",
+            "two.toml",
+        )
+        .unwrap();
+        let opts = CalibrationOptions::default();
+        let first = default_params(&m, &opts);
+        let second = second_start(&m, &opts);
+        assert_eq!(first.len(), second.len());
+        let shifts: Vec<f64> = first
+            .iter()
+            .zip(&second)
+            .filter(|(f, _)| f.log)
+            .map(|(f, s)| ((s.start - f.start) / SECOND_START_FACTOR.ln()).round())
+            .collect();
+        // capacity a up, its room conductance down, then b, then the link
+        assert_eq!(shifts, vec![1.0, -1.0, 1.0, -1.0, 1.0]);
+        for (f, s) in first.iter().zip(&second) {
+            // same bounds and priors; the initial offsets keep their start
+            assert_eq!((f.lo, f.hi, f.prior), (s.lo, s.hi, s.prior));
+            if !f.log {
+                assert_eq!(f.start, s.start);
+            }
+        }
+    }
+
+    #[test]
+    fn two_starts_are_one_solution_within_a_tenth_or_the_noise() {
+        let cal = |ssr: f64| Calibration {
+            ssr,
+            sigma_e: 0.1,
+            ..candidate(Cause::ThermalLag, 0.0, 1.0, 0.0).calibration
+        };
+        let (c1, c2) = (cal(100.0), cal(80.0));
+        let check = |r1: f64, r2: f64| StartCheck::of((&c1, &holdout(r1)), (&c2, &holdout(r2)));
+        assert!(check(2.0, 2.19).unique);
+        assert!(!check(2.0, 2.21).unique);
+        assert!(!check(2.0, 1.79).unique);
+        // near the noise, the noise is the tolerance
+        assert!(check(0.3, 0.39).unique);
+        assert!((check(2.0, 2.0).training_ssr_ratio - 0.8).abs() < 1e-12);
+        // a second start that fits the training rows worse is a worse minimum, not a rival
+        let worse = StartCheck::of((&c2, &holdout(2.0)), (&c1, &holdout(4.0)));
+        assert!(worse.unique && worse.training_ssr_ratio > 1.0);
     }
 
     #[test]
