@@ -187,7 +187,7 @@ class MachineModel:
         holdout_fraction: float = 0.3,
         min_score: float = 0.1,
         noise_ratio: float = 2.0,
-        network: str = "recalibrate",
+        network: str = "auto",
         progress: Callable[[int, int, int], object] | None = None,
     ) -> dict[str, Any]:
         """The diagnosis in rounds: ``report`` (report.json as JSON text: the round-1 fields, plus
@@ -209,7 +209,7 @@ class MachineModel:
         holdout_fraction: float = 0.3,
         min_score: float = 0.1,
         noise_ratio: float = 2.0,
-        network: str = "recalibrate",
+        network: str = "auto",
         progress: Callable[[int, int, int], object] | None = None,
     ) -> list[dict[str, Any]]:
         """``diagnose`` of every axis in ``axes`` (empty: every drift entry), in parallel; a list

@@ -719,9 +719,11 @@ def build_parser() -> argparse.ArgumentParser:
                     help="error axis; repeat for several (default: every drift entry of the machine). "
                          "Several axes write a summary report.json/report.html and <axis>.report.json, "
                          "<axis>.report.html, <axis>.calibrated.toml, <axis>.extended.toml")
-    dg.add_argument("--network", choices=NETWORK_RULES, default="recalibrate",
-                    help="the baseline's thermal network: recalibrate it on the training rows and the axis "
-                         "(default), keep it as the machine file gives it (only the start and the drift map "
+    dg.add_argument("--network", choices=NETWORK_RULES, default="auto",
+                    help="the baseline's thermal network: auto (default): recalibrate, but keep a network "
+                         "`thermerr init` identified when its recalibration is not unique (a second start fits "
+                         "the training rows as well and holds out differently); recalibrate it on the training "
+                         "rows and the axis, keep it as the machine file gives it (only the start and the drift map "
                          "fitted: a network `thermerr init` identified from this run, or one you trust), or "
                          "best: both, and the one with the smaller held-out residual of the error and the "
                          "temperatures together (noise-normalised), or shared: one network for every axis, "
@@ -765,8 +767,8 @@ def build_parser() -> argparse.ArgumentParser:
     fld.add_argument("runs", nargs="+", help=runs_help)
     fld.add_argument("--machine", required=True, help="nominal machine TOML")
     fld.add_argument("--axis", default=None, help="error axis (default: the machine's first)")
-    fld.add_argument("--network", choices=NETWORK_RULES, default="recalibrate",
-                     help="the baseline's thermal network, as for thermerr diagnose (default recalibrate)")
+    fld.add_argument("--network", choices=NETWORK_RULES, default="auto",
+                     help="the baseline's thermal network, as for thermerr diagnose (default auto)")
     fld.add_argument("--out", required=True,
                      help="directory for OUT/<run>/report.* and fleet-summary.{json,csv}")
     for sp in (flf, fle, fld):

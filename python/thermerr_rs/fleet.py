@@ -458,7 +458,7 @@ def diagnose_runs(
     axis: str | None = None,
     holdout_fraction: float = 0.3,
     nan: Literal["error", "drop", "interpolate"] = "error",
-    network: str = "recalibrate",
+    network: str = "auto",
     scheduler: Scheduler = None,
     workers: int | None = None,
 ) -> list[RunResult]:
@@ -468,7 +468,7 @@ def diagnose_runs(
     on the rest (``holdout_fraction``). ``figures``: ``verdict``, ``column``, ``gain_pct``,
     ``baseline_rms`` and ``extended_rms`` (held-out, µm). ``network``: the baseline's network
     rule, as for :func:`~thermerr_rs.thermal.diagnose`. A machine file that cannot be read, or a
-    rule that is not one of the three, is refused before any task starts.
+    rule that is not one of them, is refused before any task starts.
     """
     from .thermal import NETWORK_RULES, Machine
 

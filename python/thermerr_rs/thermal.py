@@ -209,11 +209,12 @@ class Diagnosis:
 
     @property
     def baseline_unique(self) -> bool:
-        """False when the recalibrated baseline, calibrated again from a second start (every network
-        parameter 25 % off the file's values), fits the training rows as well or better and holds out
-        differently (``report["baseline_network"]["second_start"]``); True otherwise, and for a kept
-        or shared network (one solution)."""
-        return bool(self.report["baseline_network"].get("second_start", {}).get("unique", True))
+        """False when the baseline is recalibrated and, calibrated again from a second start (every
+        network parameter 25 % off the file's values), fits the training rows as well or better and
+        holds out differently (``report["baseline_network"]["second_start"]``); True otherwise, and
+        for a kept or shared network (one solution)."""
+        bn = self.report["baseline_network"]
+        return bn["network"] != "recalibrated" or bool(bn.get("second_start", {}).get("unique", True))
 
     def _text(self) -> str:
         b, e = self.report["baseline"], self.report["extended"]
@@ -259,15 +260,19 @@ def _progress_bar(show: bool | None, desc: str) -> Iterator[Callable[[int, int, 
 
 def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: str | None = None,
              holdout_fraction: float = 0.3, min_score: float = 0.1, noise_ratio: float = 2.0,
-             network: str = "recalibrate", progress: bool | None = None) -> Diagnosis:
+             network: str = "auto", progress: bool | None = None) -> Diagnosis:
     """Calibrate ``machine`` on ``run`` (its first 70 % when no ``holdout`` run is given), fit the
     extension of every catalogued cause, score all on the held-out data and name the cause; then
     go on in rounds on the extended machine while a further cause passes (docs/machine-model.md).
 
     Every figure in the result is on held-out data: the ``holdout`` run, or the last
     ``holdout_fraction`` of ``run``. ``network``: the baseline's thermal network —
-    ``"recalibrate"`` (default: every capacity, conductance and source fitted on the training rows
-    and this axis), ``"keep"`` (the machine's network as given, only the initial offsets and the
+    ``"auto"`` (default: as ``"recalibrate"``, except that a network identified from data
+    (:meth:`Machine.identify`, ``thermerr init``) is kept when its recalibration is not unique:
+    a second start fits the training rows as well and holds out differently),
+    ``"recalibrate"`` (every capacity, conductance and source fitted on the training rows
+    and this axis; ``report["baseline_network"]["second_start"]`` says whether a second start
+    ends elsewhere), ``"keep"`` (the machine's network as given, only the initial offsets and the
     drift map fitted: a network identified from this very run, or one you trust), ``"best"``
     (both, and the one with the smaller held-out residual of the error and the temperatures
     together, noise-normalised; ``report["baseline_network"]`` gives
@@ -352,7 +357,7 @@ class AxesDiagnosis:
 
 def diagnose_axes(run: Run, machine: Machine, holdout: Run | None = None, *, axes: list[str] | None = None,
                   holdout_fraction: float = 0.3, min_score: float = 0.1,
-                  noise_ratio: float = 2.0, network: str = "recalibrate",
+                  noise_ratio: float = 2.0, network: str = "auto",
                   progress: bool | None = None) -> AxesDiagnosis:
     """:func:`diagnose` for several error axes at once (default: every drift entry of the
     machine), in parallel. Each axis is diagnosed on the shared temperatures and its own error

@@ -271,7 +271,7 @@ impl PyMachine {
 
     /// The full diagnosis; returns a dict: `report` (report.json as JSON text), `calibration`
     /// (the baseline's fit figures), `series` and the calibrated/extended TOML.
-    #[pyo3(signature = (source, time, names, data, holdout = None, *, axis = None, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0, network = "recalibrate", progress = None))]
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axis = None, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0, network = "auto", progress = None))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn diagnose<'py>(
         &self,
@@ -311,7 +311,7 @@ impl PyMachine {
 
     /// The diagnosis of every axis in `axes`, one per axis in parallel, each on the shared
     /// temperatures and its own error column; a list of `diagnose`'s dicts in `axes` order.
-    #[pyo3(signature = (source, time, names, data, holdout = None, *, axes, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0, network = "recalibrate", progress = None))]
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axes, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0, network = "auto", progress = None))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn diagnose_axes<'py>(
         &self,

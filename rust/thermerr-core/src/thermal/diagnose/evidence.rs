@@ -7,7 +7,22 @@ use super::{BaselineNetwork, Candidate, Holdout, NetworkRule, NetworkUsed, SECON
 /// Which network the baseline has, when it is not the default (recalibrated on the axis).
 pub fn network(b: &BaselineNetwork, axis: &str) -> String {
     match (b.rule, b.recalibrated_rmse_um, b.kept_rmse_um) {
-        (NetworkRule::Recalibrate, _, _) => String::new(),
+        (NetworkRule::Auto, Some(r), Some(k)) if b.network == NetworkUsed::Kept => {
+            let (ratio, moved) = b
+                .second_start
+                .as_ref()
+                .map_or((f64::NAN, f64::NAN), |s| (s.training_ssr_ratio, s.rmse_um));
+            format!(
+                " The network was identified from data, and its recalibration on this axis is not \
+                 unique: started with every network parameter {:.0} % off, it fits the training \
+                 rows as well or better (SSR {ratio:.2}x) and holds out {moved:.2} µm on {axis} \
+                 against {r:.2} µm. The training rows cannot choose between the two, so the \
+                 baseline keeps the identified network (rule `auto`; only its start and the \
+                 drift map fitted), which has one solution: {k:.2} µm held out.",
+                100.0 * (SECOND_START_FACTOR - 1.0),
+            )
+        }
+        (NetworkRule::Recalibrate | NetworkRule::Auto, _, _) => String::new(),
         (NetworkRule::Shared, _, _) => " The baseline's network is the machine's one network, \
              calibrated once on the temperatures alone; only the start and the drift map of this \
              axis are fitted to it."
@@ -32,7 +47,7 @@ pub fn network(b: &BaselineNetwork, axis: &str) -> String {
 /// What a second start of the recalibrated baseline says, when it ends elsewhere held out.
 pub fn second_start(b: &BaselineNetwork, first: &Holdout, axis: &str) -> String {
     match &b.second_start {
-        Some(s) if !s.unique => format!(
+        Some(s) if !s.unique && b.network == NetworkUsed::Recalibrated => format!(
             " The baseline's calibration is not unique on this run: started with every network \
              parameter {:.0} % off the machine file's values, it fits the training rows as well or \
              better (SSR {:.2}x) and holds out {:.2} µm on {axis} against {:.2} µm. The training \

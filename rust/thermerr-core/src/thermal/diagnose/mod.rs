@@ -85,7 +85,7 @@ impl Default for DiagnoseOptions {
             min_score: 0.1,
             noise_ratio: 2.0,
             calibration: CalibrationOptions::default(),
-            network: NetworkRule::Recalibrate,
+            network: NetworkRule::Auto,
             progress: None,
         }
     }
@@ -95,8 +95,13 @@ impl Default for DiagnoseOptions {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum NetworkRule {
-    /// Every capacity, conductance and source calibrated on the training rows and the axis.
+    /// The default: `recalibrate`, except that a network identified from data (`thermerr init`)
+    /// is kept when its recalibration is not unique (a second start fits the training rows as
+    /// well and holds out differently, [`StartCheck`]): the training rows cannot choose between
+    /// the two, and the identified network, calibrated already, has one solution.
     #[default]
+    Auto,
+    /// Every capacity, conductance and source calibrated on the training rows and the axis.
     Recalibrate,
     /// The network as the machine gives it; only the initial offsets and the axis' drift map are
     /// fitted (a network identified from this very run, or one the user trusts).
@@ -110,7 +115,8 @@ pub enum NetworkRule {
 }
 
 impl NetworkRule {
-    pub const ALL: [NetworkRule; 4] = [
+    pub const ALL: [NetworkRule; 5] = [
+        NetworkRule::Auto,
         NetworkRule::Recalibrate,
         NetworkRule::Keep,
         NetworkRule::Best,
@@ -119,6 +125,7 @@ impl NetworkRule {
 
     pub fn as_str(self) -> &'static str {
         match self {
+            NetworkRule::Auto => "auto",
             NetworkRule::Recalibrate => "recalibrate",
             NetworkRule::Keep => "keep",
             NetworkRule::Best => "best",
@@ -279,12 +286,36 @@ fn baseline_of(
         kept_joint_ssr: both.map(|(_, k)| k.joint_ssr),
         second_start: None,
     };
+    let recal_checked = || -> Result<(Calibration, Holdout, StartCheck)> {
+        let (first, second) = rayon::join(recal, || recal_from(Some(second_start(m, copts))));
+        let ((c, h), (c2, h2)) = (first?, second?);
+        let s = StartCheck::of((&c, &h), (&c2, &h2));
+        Ok((c, h, s))
+    };
     Ok(match rule {
-        NetworkRule::Recalibrate => {
-            let (first, second) = rayon::join(recal, || recal_from(Some(second_start(m, copts))));
-            let ((c, h), (c2, h2)) = (first?, second?);
+        NetworkRule::Auto if m.identified.is_some() => {
+            let (r, k) = rayon::join(recal_checked, kept);
+            let ((rc, rh, s), (kc, kh)) = (r?, k?);
+            let both = Some((&rh, &kh));
+            if s.unique {
+                let b = BaselineNetwork {
+                    second_start: Some(s),
+                    ..choice(NetworkUsed::Recalibrated, both)
+                };
+                (rc, rh, b)
+            } else {
+                let b = BaselineNetwork {
+                    second_start: Some(s),
+                    ..choice(NetworkUsed::Kept, both)
+                };
+                (kc, kh, b)
+            }
+        }
+
+        NetworkRule::Recalibrate | NetworkRule::Auto => {
+            let (c, h, s) = recal_checked()?;
             let b = BaselineNetwork {
-                second_start: Some(StartCheck::of((&c, &h), (&c2, &h2))),
+                second_start: Some(s),
                 ..choice(NetworkUsed::Recalibrated, None)
             };
             (c, h, b)
