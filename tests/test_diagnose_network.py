@@ -109,7 +109,7 @@ def _second_start_rule(d) -> bool:
     """`unique` as the docs define it, from the report's own figures."""
     ss, base = d.report["baseline_network"]["second_start"], d.report["baseline"]["rmse_um"]
     moved = abs(ss["rmse_um"] - base) > max(0.1 * base, d.report["noise_um"])
-    return ss["training_ssr_ratio"] > 1.0 or not moved
+    return ss["training_ssr_ratio"] > 1.05 or not moved
 
 
 def test_a_recalibrated_baseline_is_calibrated_again_from_a_second_start(case):
@@ -121,7 +121,7 @@ def test_a_recalibrated_baseline_is_calibrated_again_from_a_second_start(case):
     d = diagnose(train, m, test, progress=False)
     ss = d.report["baseline_network"]["second_start"]
     assert set(ss) == {"rmse_um", "training_ssr_ratio", "unique"}
-    assert ss["unique"] and _second_start_rule(d) and ss["training_ssr_ratio"] > 1.0
+    assert ss["unique"] and _second_start_rule(d) and ss["training_ssr_ratio"] > 1.05
     assert "not unique on this run" not in d.evidence
     kept = diagnose(train, m, test, network="keep", progress=False)
     assert "second_start" not in kept.report["baseline_network"]

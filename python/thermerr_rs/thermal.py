@@ -210,7 +210,7 @@ class Diagnosis:
     @property
     def baseline_unique(self) -> bool:
         """False when the baseline is recalibrated and, calibrated again from a second start (every
-        network parameter 25 % off the file's values), fits the training rows as well or better and
+        network parameter 25 % off the file's values), fits the training rows as well (within 5 %) or better and
         holds out differently (``report["baseline_network"]["second_start"]``); True otherwise, and
         for a kept or shared network (one solution)."""
         bn = self.report["baseline_network"]
@@ -350,7 +350,7 @@ class AxesDiagnosis:
         moved = [a for a, d in self.by_axis.items() if not d.baseline_unique]
         if moved:
             text += (f"\nnote: the recalibrated baseline is not unique on {', '.join(moved)}: from a second start "
-                     "it fits the training rows as well or better and holds out differently (see each axis's "
+                     "it fits the training rows as well (within 5 %) or better and holds out differently (see each axis's "
                      "evidence); --network best or keep gives a baseline with one solution")
         return text + (_identified_line() if self.report["identified"] else "")
 

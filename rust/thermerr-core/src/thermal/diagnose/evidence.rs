@@ -15,7 +15,7 @@ pub fn network(b: &BaselineNetwork, axis: &str) -> String {
             format!(
                 " The network was identified from data, and its recalibration on this axis is not \
                  unique: started with every network parameter {:.0} % off, it fits the training \
-                 rows as well or better (SSR {ratio:.2}x) and holds out {moved:.2} µm on {axis} \
+                 rows as well (SSR {ratio:.2}x, within 5 % or better) and holds out {moved:.2} µm on {axis} \
                  against {r:.2} µm. The training rows cannot choose between the two, so the \
                  baseline keeps the identified network (rule `auto`; only its start and the \
                  drift map fitted), which has one solution: {k:.2} µm held out.",
@@ -49,8 +49,8 @@ pub fn second_start(b: &BaselineNetwork, first: &Holdout, axis: &str) -> String 
     match &b.second_start {
         Some(s) if !s.unique && b.network == NetworkUsed::Recalibrated => format!(
             " The baseline's calibration is not unique on this run: started with every network \
-             parameter {:.0} % off the machine file's values, it fits the training rows as well or \
-             better (SSR {:.2}x) and holds out {:.2} µm on {axis} against {:.2} µm. The training \
+             parameter {:.0} % off the machine file's values, it fits the training rows as well \
+             (SSR {:.2}x, within 5 % or better) and holds out {:.2} µm on {axis} against {:.2} µm. The training \
              rows do not pin the network down, and what is named here was found from the file's \
              values; `--network keep` or `best` (for a network identified from this run, or one \
              you trust) gives a baseline with one solution.",
