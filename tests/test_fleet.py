@@ -167,6 +167,7 @@ def test_diagnose_two_vmc_runs_on_cluster(tmp_path, cluster, capsys):
         f = r["figures"]
         assert r["ok"] and f["verdict"] == ref.verdict and f["gain_pct"] == ref.gain_pct
         assert f["baseline_rms"] == ref.report["baseline"]["rmse_um"]
+        assert f["baseline_unique"] is ref.baseline_unique
         rep = json.loads((out / r["name"] / "report.json").read_text())
         assert rep["verdict"] == ref.verdict
         assert (out / r["name"] / "report.html").exists() and (out / r["name"] / "calibrated.toml").exists()

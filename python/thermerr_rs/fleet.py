@@ -264,7 +264,8 @@ def _diagnose_task(path: str, machine_toml: str, machine_file: str, axis: str | 
         d.write(target)
         b, e = d.report["baseline"], d.report["extended"]
         return str(target), _finite({"verdict": d.verdict, "column": d.column, "gain_pct": d.gain_pct,
-                                     "baseline_rms": float(b["rmse_um"]), "extended_rms": float(e["rmse_um"])})
+                                     "baseline_rms": float(b["rmse_um"]), "extended_rms": float(e["rmse_um"]),
+                                     "baseline_unique": d.baseline_unique})
 
     return _guarded(path, work)
 
@@ -466,7 +467,9 @@ def diagnose_runs(
     TOML file) and write each report into ``out_dir/<stem>/`` (``report.json``, ``report.html``,
     ``calibrated.toml``, ``extended.toml``). Each run is calibrated on its first 70 % and scored
     on the rest (``holdout_fraction``). ``figures``: ``verdict``, ``column``, ``gain_pct``,
-    ``baseline_rms`` and ``extended_rms`` (held-out, µm). ``network``: the baseline's network
+    ``baseline_rms`` and ``extended_rms`` (held-out, µm), and ``baseline_unique`` (False where a
+    recalibrated baseline has a second solution: :attr:`~thermerr_rs.thermal.Diagnosis.baseline_unique`).
+    ``network``: the baseline's network
     rule, as for :func:`~thermerr_rs.thermal.diagnose`. A machine file that cannot be read, or a
     rule that is not one of them, is refused before any task starts.
     """
