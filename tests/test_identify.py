@@ -288,7 +288,7 @@ def test_the_report_says_the_network_was_identified(tmp_path):
     for n in m.nodes:
         assert f">{n}</text>" in page, n
     assert "or an unexplained remainder, may also be a shortcoming" in page
-    assert str(d).endswith("recalibrating it on one axis can overfit a real run)")  # the printed result says it too
+    assert str(d).endswith("the default, auto, keeps it only where the recalibration is not unique)")  # the printed result says it too
     nominal = diagnose(train, Machine.from_toml(c.nominal_toml()), test)
     assert nominal.report["identified"] is False and "identification" not in nominal.report
     assert "identified from data" not in Path(nominal.write(tmp_path / "nom")).read_text()

@@ -315,7 +315,8 @@ IDENTIFIED_CAVEAT = (
     "shortcoming of the identified network (its node count, its links, its sensors); compare with "
     "thermerr init --nodes N or a network written from the drawings, and with thermerr diagnose "
     "--network best, which also tries the network exactly as identified (recalibrating it on one "
-    "axis can overfit a real run)")
+    "axis can overfit a real run; the default, auto, keeps it only where the recalibration is not "
+    "unique)")
 
 
 def render_axes_html(summary: dict[str, Any]) -> str:
