@@ -166,7 +166,7 @@ def main() -> None:
                 times.append(dt_s)
                 table[h][d.verdict] += 1
                 gains[h].append(d.gain_pct)
-                moved += not d.report["baseline_network"].get("second_start", {}).get("unique", True)
+                moved += not d.baseline_unique
                 if c.column:
                     col_n += 1
                     col_ok += d.column == c.column

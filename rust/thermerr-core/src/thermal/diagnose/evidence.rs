@@ -2,7 +2,10 @@
 
 use super::rounds::{Accepted, Round, MIN_SHARE_OF_EXCESS};
 use super::verdict::{supported, Verdict};
-use super::{BaselineNetwork, Candidate, Holdout, NetworkRule, NetworkUsed, SECOND_START_FACTOR};
+use super::{
+    BaselineNetwork, Candidate, Holdout, NetworkRule, NetworkUsed, SECOND_START_FACTOR,
+    TRAINING_TIE,
+};
 
 /// Which network the baseline has, when it is not the default (recalibrated on the axis).
 pub fn network(b: &BaselineNetwork, axis: &str) -> String {
@@ -15,11 +18,12 @@ pub fn network(b: &BaselineNetwork, axis: &str) -> String {
             format!(
                 " The network was identified from data, and its recalibration on this axis is not \
                  unique: started with every network parameter {:.0} % off, it fits the training \
-                 rows as well (SSR {ratio:.2}x, within 5 % or better) and holds out {moved:.2} µm on {axis} \
+                 rows as well (SSR {ratio:.2}x, within {tie:.0} % or better) and holds out {moved:.2} µm on {axis} \
                  against {r:.2} µm. The training rows cannot choose between the two, so the \
                  baseline keeps the identified network (rule `auto`; only its start and the \
                  drift map fitted), which has one solution: {k:.2} µm held out.",
                 100.0 * (SECOND_START_FACTOR - 1.0),
+                tie = 100.0 * (TRAINING_TIE - 1.0),
             )
         }
         (NetworkRule::Recalibrate | NetworkRule::Auto, _, _) => String::new(),
@@ -50,7 +54,7 @@ pub fn second_start(b: &BaselineNetwork, first: &Holdout, axis: &str) -> String 
         Some(s) if !s.unique && b.network == NetworkUsed::Recalibrated => format!(
             " The baseline's calibration is not unique on this run: started with every network \
              parameter {:.0} % off the machine file's values, it fits the training rows as well \
-             (SSR {:.2}x, within 5 % or better) and holds out {:.2} µm on {axis} against {:.2} µm. The training \
+             (SSR {:.2}x, within {tie:.0} % or better) and holds out {:.2} µm on {axis} against {:.2} µm. The training \
              rows do not pin the network down, and what is named here was found from the file's \
              values; `--network keep` or `best` (for a network identified from this run, or one \
              you trust) gives a baseline with one solution.",
@@ -58,6 +62,7 @@ pub fn second_start(b: &BaselineNetwork, first: &Holdout, axis: &str) -> String 
             s.training_ssr_ratio,
             s.rmse_um,
             first.rmse_um,
+            tie = 100.0 * (TRAINING_TIE - 1.0),
         ),
         _ => String::new(),
     }

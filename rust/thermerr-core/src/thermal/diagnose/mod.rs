@@ -268,8 +268,9 @@ fn baseline_of(
         Ok((c, h))
     };
     let recal = || recal_from(None);
+    let second = || recal_from(Some(second_start(m, copts)));
     let check = |c: &Calibration, h: &Holdout| -> Result<StartCheck> {
-        let (c2, h2) = recal_from(Some(second_start(m, copts)))?;
+        let (c2, h2) = second()?;
         Ok(StartCheck::of((c, h), (&c2, &h2)))
     };
     let kept_of = |m: &Machine| -> Result<(Calibration, Holdout)> {
@@ -291,9 +292,10 @@ fn baseline_of(
         kept_joint_ssr: both.map(|(_, k)| k.joint_ssr),
         second_start: None,
     };
+    // the baseline and its second start, in parallel
     let recal_checked = || -> Result<(Calibration, Holdout, StartCheck)> {
-        let (first, second) = rayon::join(recal, || recal_from(Some(second_start(m, copts))));
-        let ((c, h), (c2, h2)) = (first?, second?);
+        let (first, other) = rayon::join(recal, second);
+        let ((c, h), (c2, h2)) = (first?, other?);
         let s = StartCheck::of((&c, &h), (&c2, &h2));
         Ok((c, h, s))
     };
@@ -301,22 +303,20 @@ fn baseline_of(
         NetworkRule::Auto if m.identified.is_some() => {
             let (r, k) = rayon::join(recal_checked, kept);
             let ((rc, rh, s), (kc, kh)) = (r?, k?);
-            let both = Some((&rh, &kh));
-            if s.unique {
-                let b = BaselineNetwork {
-                    second_start: Some(s),
-                    ..choice(NetworkUsed::Recalibrated, both)
-                };
-                (rc, rh, b)
+            let used = if s.unique {
+                NetworkUsed::Recalibrated
             } else {
-                let b = BaselineNetwork {
-                    second_start: Some(s),
-                    ..choice(NetworkUsed::Kept, both)
-                };
-                (kc, kh, b)
+                NetworkUsed::Kept
+            };
+            let b = BaselineNetwork {
+                second_start: Some(s),
+                ..choice(used, Some((&rh, &kh)))
+            };
+            match used {
+                NetworkUsed::Kept => (kc, kh, b),
+                _ => (rc, rh, b),
             }
         }
-
         NetworkRule::Recalibrate | NetworkRule::Auto => {
             let (c, h, s) = recal_checked()?;
             let b = BaselineNetwork {
