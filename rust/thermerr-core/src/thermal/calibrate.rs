@@ -17,7 +17,7 @@ use super::sim::{
     drift_terms, finish, lag, median_step, simulate_nodes, Init, RunView, Simulation, Thinned,
 };
 use crate::error::{Error, Result};
-use crate::linalg::lstsq;
+use crate::linalg::{lstsq, lstsq_with_prior};
 use crate::optim::{least_squares, LmOptions};
 
 /// One free parameter and where it lives in the machine.
@@ -280,25 +280,8 @@ fn fit_drift(
     if nb == 0 {
         return Ok((Vec::new(), vec![0.0; measured.len()]));
     }
-    let a = Mat::from_fn(rows + nb, nb, |i, j| {
-        if i < rows {
-            basis[j][i] / sigma_e
-        } else if i - rows == j {
-            1.0 / prior[j].1
-        } else {
-            0.0
-        }
-    });
-    let b: Vec<f64> = (0..rows + nb)
-        .map(|i| {
-            if i < rows {
-                measured[i] / sigma_e
-            } else {
-                prior[i - rows].0 / prior[i - rows].1
-            }
-        })
-        .collect();
-    let coef = lstsq(a.as_ref(), &b)?;
+    let cols: Vec<&[f64]> = basis.iter().map(Vec::as_slice).collect();
+    let coef = lstsq_with_prior(&cols, measured, rows, sigma_e, &prior)?;
     let mut fitted = vec![0.0; measured.len()];
     for (c, s) in coef.iter().zip(&basis) {
         for (f, v) in fitted.iter_mut().zip(s) {

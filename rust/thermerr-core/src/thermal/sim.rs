@@ -1,7 +1,8 @@
 //! Exact simulation of the lumped network: C dT/dt = G·(T_j − T_i) + G_a (T_amb − T) + Q(u),
 //! inputs and boundary temperatures held between samples, each step the exact solution
-//! x⁺ = Φ x + Γ f with Φ = e^{Mh} and Γ = ∫₀ʰ e^{Ms} ds (read off one matrix exponential of the
-//! augmented matrix [[M, I], [0, 0]]·h), cached per distinct step length.
+//! x⁺ = Φ x + Γ f with Φ = e^{Mh} and Γ = ∫₀ʰ e^{Ms} ds (both by one scaled Taylor series and
+//! its doublings, what e^{[[M, I], [0, 0]]·h} holds in its top blocks), cached per distinct step
+//! length.
 
 use std::collections::HashMap;
 
@@ -98,29 +99,6 @@ impl Simulation {
         let n = self.node_names.len();
         self.temps.chunks_exact(n).map(|r| r[k]).collect()
     }
-}
-
-/// e^A by scaling and squaring with a Taylor polynomial (‖A/2^s‖ ≤ 1/2, 20 terms: truncation
-/// below 1e-20 relative), adequate for the small dense matrices of a thermal network.
-pub fn expm(a: &DMatrix<f64>) -> DMatrix<f64> {
-    let norm = a.iter().fold(0.0_f64, |m, v| m.max(v.abs())) * a.nrows() as f64;
-    let s = if norm > 0.5 {
-        (norm / 0.5).log2().ceil() as i32
-    } else {
-        0
-    };
-    let scaled = a / 2f64.powi(s);
-    let n = a.nrows();
-    let mut term = DMatrix::<f64>::identity(n, n);
-    let mut sum = term.clone();
-    for k in 1..=20 {
-        term = &term * &scaled / k as f64;
-        sum += &term;
-    }
-    for _ in 0..s {
-        sum = &sum * &sum;
-    }
-    sum
 }
 
 /// The network reduced to its simulated (non-boundary) nodes.
@@ -346,119 +324,103 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         let at: Vec<i64> = t.iter().map(|&v| ticks.at(v)).collect();
         at.windows(2).map(|w| w[1] - w[0]).collect()
     };
-    let augmented = |h: f64| {
-        let mut big = DMatrix::<f64>::zeros(2 * nd, 2 * nd);
-        big.view_mut((0, 0), (nd, nd)).copy_from(&net.m);
-        for p in 0..nd {
-            big[(p, nd + p)] = 1.0;
-        }
-        big * h
-    };
-    let split = |e: &DMatrix<f64>| {
-        (
-            e.view((0, 0), (nd, nd)).into_owned(),
-            e.view((0, nd), (nd, nd)).into_owned(),
-        )
-    };
-    let mut cache: HashMap<i64, (DMatrix<f64>, DMatrix<f64>)> = HashMap::new();
+    let mflat: Vec<f64> = (0..nd * nd).map(|i| net.m[(i / nd, i % nd)]).collect();
+    let mut cache: HashMap<i64, Transition> = HashMap::new();
     {
-        // many distinct step lengths close together (a jittering logger): e^{B·(m+1)q} =
-        // e^{B·mq}·e^{Bq}, so one exponential for the shortest step and one for the grid step,
-        // then a small product per grid step up to the longest, instead of one exponential each
+        // many distinct step lengths close together (a jittering logger): a step of (m+1)
+        // ticks is one of m ticks followed by one of one tick, so one transition for the
+        // shortest step and one for the tick, then a small product per tick up to the longest,
+        // instead of one series each
         let mut steps = dt.clone();
         steps.dedup(); // a logger's steps repeat: the sort below sees a handful of values
         steps.sort_unstable();
         steps.dedup();
         if let (Some(&lo), Some(&hi)) = (steps.first(), steps.last()) {
             if steps.len() > 2 && steps.len() <= MAX_STEP_LENGTHS && hi - lo <= CHAIN_SPAN {
-                let eq = expm(&augmented(ticks.q));
-                let mut e = expm(&augmented(lo as f64 * ticks.q));
+                let eq = Transition::of(&mflat, nd, ticks.q);
+                let mut e = Transition::of(&mflat, nd, lo as f64 * ticks.q);
                 let mut want = steps.iter().peekable();
                 for m in lo..=hi {
-                    if want.peek() == Some(&&m) {
-                        cache.insert(m, split(&e));
-                        want.next();
-                    }
                     if m < hi {
-                        e = &e * &eq;
+                        let next = e.then(&eq, nd);
+                        if want.peek() == Some(&&m) {
+                            cache.insert(m, e);
+                            want.next();
+                        }
+                        e = next;
+                    } else if want.peek() == Some(&&m) {
+                        cache.insert(m, e);
+                        break;
                     }
                 }
             }
         }
     }
-    let mut f = vec![0.0; nd];
-    let mut xn = vec![0.0; nd];
-    // the step's transition matrices as flat row-major arrays, looked up again only when the
-    // step length changes (a logger with a fixed period has one for the whole run)
-    let mut cur_steps: Option<i64> = None;
-    let mut phi = vec![0.0; nd * nd];
-    let mut gam = vec![0.0; nd * nd];
-    // a source's power for the last input value (stepped inputs repeat it for hours)
-    let mut last_power: Vec<(f64, f64)> = vec![(f64::NAN, 0.0); srcs.len()];
-    for k in 0..n_t {
-        let row = &mut out[k * nn..(k + 1) * nn];
-        for (p, &i) in net.dyn_nodes.iter().enumerate() {
-            row[i] = x[p];
+    // the forcing Γ·C⁻¹·(G_a·T_amb + Σ G·T_bnd + Σ Q) as a few scalar drivers per step (the
+    // ambient, each boundary node, each source's power) times fixed vectors: with `drivers`
+    // columns B (nd × nv, the conductances and unit powers over the capacities), each step is
+    // x⁺ = Φ x + (Γ·B)·d_k
+    let bnd_nodes: Vec<usize> = {
+        let mut b: Vec<usize> = net.bnd_links.iter().map(|&(_, b, _)| b).collect();
+        b.sort_unstable();
+        b.dedup();
+        b
+    };
+    let nv = 1 + bnd_nodes.len() + srcs.len();
+    let mut b_in = vec![0.0; nd * nv];
+    for p in 0..nd {
+        b_in[p * nv] = net.g_amb[p] / net.cap[p];
+    }
+    for &(p, b, g) in &net.bnd_links {
+        let v = 1 + bnd_nodes.iter().position(|&x| x == b).unwrap_or(0);
+        b_in[p * nv + v] += g / net.cap[p];
+    }
+    for (s, &(p, ..)) in srcs.iter().enumerate() {
+        b_in[p * nv + 1 + bnd_nodes.len() + s] += 1.0 / net.cap[p];
+    }
+    let mut drv = vec![0.0; n_t * nv];
+    for (k, d) in drv.chunks_exact_mut(nv).enumerate() {
+        d[0] = amb[k];
+        for (v, &b) in bnd_nodes.iter().enumerate() {
+            d[1 + v] = bnd[b].map_or(0.0, |c| c[k]);
         }
-        for (i, b) in bnd.iter().enumerate() {
-            if let Some(col) = b {
-                row[i] = col[k];
-            }
-        }
-        if k + 1 == n_t {
-            break;
-        }
-        if k % 1024 == 0 {
-            crate::interrupt::check()?;
-        }
-        let steps = dt[k];
-        for (fp, g) in f.iter_mut().zip(&net.g_amb) {
-            *fp = g * amb[k];
-        }
-        for &(p, b, g) in &net.bnd_links {
-            f[p] += g * bnd[b].map_or(0.0, |c| c[k]);
-        }
-        for (&(p, u, w, r, e), last) in srcs.iter().zip(last_power.iter_mut()) {
-            let uk = u[k];
+    }
+    for (s, &(_, u, w, r, e)) in srcs.iter().enumerate() {
+        // a source's power for the last input value (stepped inputs repeat it for hours)
+        let mut last: (f64, f64) = (f64::NAN, 0.0);
+        let v = 1 + bnd_nodes.len() + s;
+        for (k, &uk) in u.iter().enumerate().take(n_t) {
             if uk > 0.0 {
                 if uk.to_bits() != last.0.to_bits() {
-                    *last = (uk, w * (uk / r).powf(e));
+                    last = (uk, w * (uk / r).powf(e));
                 }
-                f[p] += last.1;
+                drv[k * nv + v] = last.1;
             }
         }
-        for (fp, c) in f.iter_mut().zip(&net.cap) {
-            *fp /= c;
-        }
-        if cur_steps != Some(steps) {
-            if !cache.contains_key(&steps) {
-                let e = expm(&augmented(steps as f64 * ticks.q));
-                if cache.len() >= MAX_STEP_LENGTHS {
-                    cache.clear();
-                }
-                cache.insert(steps, split(&e));
-            }
-            let (p_m, g_m) = &cache[&steps];
-            for p in 0..nd {
-                for q in 0..nd {
-                    phi[p * nd + q] = p_m[(p, q)];
-                    gam[p * nd + q] = g_m[(p, q)];
-                }
-            }
-            cur_steps = Some(steps);
-        }
-        for ((xp, pr), gr) in xn
-            .iter_mut()
-            .zip(phi.chunks_exact(nd))
-            .zip(gam.chunks_exact(nd))
-        {
-            let mut acc = 0.0;
-            for (((pq, xq), gq), fq) in pr.iter().zip(&x).zip(gr).zip(&f) {
-                acc += pq * xq + gq * fq;
-            }
-            *xp = acc;
-        }
-        std::mem::swap(&mut x, &mut xn);
+    }
+    let mut march = March {
+        nd,
+        nv,
+        nn,
+        dyn_nodes: &net.dyn_nodes,
+        bnd: &bnd,
+        b_in: &b_in,
+        drv: &drv,
+        dt: &dt,
+        cache,
+        m: &mflat,
+        q: ticks.q,
+    };
+    match nd {
+        1 => march.run::<1>(&mut x, &mut out)?,
+        2 => march.run::<2>(&mut x, &mut out)?,
+        3 => march.run::<3>(&mut x, &mut out)?,
+        4 => march.run::<4>(&mut x, &mut out)?,
+        5 => march.run::<5>(&mut x, &mut out)?,
+        6 => march.run::<6>(&mut x, &mut out)?,
+        7 => march.run::<7>(&mut x, &mut out)?,
+        8 => march.run::<8>(&mut x, &mut out)?,
+        _ => march.run::<0>(&mut x, &mut out)?,
     }
     if out.iter().any(|v| !v.is_finite()) {
         return Err(Error::Numerical(
@@ -466,6 +428,170 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         ));
     }
     Ok(out)
+}
+
+/// One step of the network: Φ = e^{Mh} and Γ = ∫₀ʰ e^{Ms} ds (n × n, row-major), so that
+/// x⁺ = Φ x + Γ f for a forcing f held over the step.
+struct Transition {
+    phi: Vec<f64>,
+    gam: Vec<f64>,
+}
+
+/// a · b of two n × n row-major matrices.
+fn matmul(a: &[f64], b: &[f64], n: usize) -> Vec<f64> {
+    let mut c = vec![0.0; n * n];
+    for i in 0..n {
+        for k in 0..n {
+            let aik = a[i * n + k];
+            for j in 0..n {
+                c[i * n + j] += aik * b[k * n + j];
+            }
+        }
+    }
+    c
+}
+
+impl Transition {
+    /// Φ and Γ of a step `h` of `m` (n × n): both Taylor series at τ = h/2^s with ‖M τ‖ ≤ 1/2
+    /// (20 terms: truncation below 1e-20 relative), then s doublings Φ(2τ) = Φ(τ)²,
+    /// Γ(2τ) = Γ(τ) + Φ(τ)·Γ(τ). The same numbers as reading both off e^{[[M, I], [0, 0]]·h},
+    /// with n × n products instead of 2n × 2n ones.
+    fn of(m: &[f64], n: usize, h: f64) -> Transition {
+        let norm = m.iter().fold(0.0_f64, |a, v| a.max(v.abs())) * n as f64 * h.abs();
+        let s = if norm > 0.5 {
+            (norm / 0.5).log2().ceil() as i32
+        } else {
+            0
+        };
+        let tau = h / 2f64.powi(s);
+        let a: Vec<f64> = m.iter().map(|v| v * tau).collect();
+        let mut term = vec![0.0; n * n];
+        for i in 0..n {
+            term[i * n + i] = 1.0;
+        }
+        let mut phi = term.clone();
+        let mut g = term.clone(); // Σ A^k/(k+1)!
+        for k in 1..=20 {
+            term = matmul(&term, &a, n);
+            let kf = k as f64;
+            for ((t, p), q) in term.iter_mut().zip(phi.iter_mut()).zip(g.iter_mut()) {
+                *t /= kf;
+                *p += *t;
+                *q += *t / (kf + 1.0);
+            }
+        }
+        let mut t = Transition {
+            phi,
+            gam: g.iter().map(|v| v * tau).collect(),
+        };
+        for _ in 0..s {
+            t = t.then(&t, n);
+        }
+        t
+    }
+
+    /// This step followed by `next`: Φ = Φ_next·Φ, Γ = Γ_next + Φ_next·Γ.
+    fn then(&self, next: &Transition, n: usize) -> Transition {
+        let mut gam = matmul(&next.phi, &self.gam, n);
+        for (g, v) in gam.iter_mut().zip(&next.gam) {
+            *g += v;
+        }
+        Transition {
+            phi: matmul(&next.phi, &self.phi, n),
+            gam,
+        }
+    }
+}
+
+/// The stepping of [`simulate_nodes`]: everything fixed over the run, the transition matrices
+/// cached per step length.
+struct March<'s> {
+    nd: usize,
+    nv: usize,
+    nn: usize,
+    dyn_nodes: &'s [usize],
+    bnd: &'s [Option<&'s [f64]>],
+    /// nd × nv, row-major: the drivers' columns before the step's Γ
+    b_in: &'s [f64],
+    /// n_t × nv, row-major: the drivers of each step
+    drv: &'s [f64],
+    dt: &'s [i64],
+    cache: HashMap<i64, Transition>,
+    /// the network's matrix M (nd × nd, row-major)
+    m: &'s [f64],
+    q: f64,
+}
+
+impl March<'_> {
+    /// Fills `out` (n_t × nn) from the start `x`. `N`: the number of simulated nodes when it is
+    /// small (the loops then unroll), 0 for any other.
+    fn run<const N: usize>(&mut self, x: &mut [f64], out: &mut [f64]) -> Result<()> {
+        let nd = if N > 0 { N } else { self.nd };
+        let (nv, nn) = (self.nv, self.nn);
+        let n_t = out.len() / nn;
+        let mut phi = vec![0.0; nd * nd];
+        let mut w = vec![0.0; nd * nv];
+        let mut xn = vec![0.0; nd];
+        let mut cur_steps: Option<i64> = None;
+        for k in 0..n_t {
+            let row = &mut out[k * nn..(k + 1) * nn];
+            for (p, &i) in self.dyn_nodes.iter().enumerate() {
+                row[i] = x[p];
+            }
+            for (i, b) in self.bnd.iter().enumerate() {
+                if let Some(col) = b {
+                    row[i] = col[k];
+                }
+            }
+            if k + 1 == n_t {
+                break;
+            }
+            if k % 1024 == 0 {
+                crate::interrupt::check()?;
+            }
+            let steps = self.dt[k];
+            if cur_steps != Some(steps) {
+                self.load(steps, nd, &mut phi, &mut w);
+                cur_steps = Some(steps);
+            }
+            let d = &self.drv[k * nv..(k + 1) * nv];
+            for p in 0..nd {
+                let pr = &phi[p * nd..(p + 1) * nd];
+                let mut acc = 0.0;
+                for q in 0..nd {
+                    acc += pr[q] * x[q];
+                }
+                let wr = &w[p * nv..(p + 1) * nv];
+                for (wv, dv) in wr.iter().zip(d) {
+                    acc += wv * dv;
+                }
+                xn[p] = acc;
+            }
+            x[..nd].copy_from_slice(&xn);
+        }
+        Ok(())
+    }
+
+    /// Φ and Γ·B of a step of `steps` ticks into `phi` (nd × nd) and `w` (nd × nv).
+    fn load(&mut self, steps: i64, nd: usize, phi: &mut [f64], w: &mut [f64]) {
+        if !self.cache.contains_key(&steps) {
+            let t = Transition::of(self.m, self.nd, steps as f64 * self.q);
+            if self.cache.len() >= MAX_STEP_LENGTHS {
+                self.cache.clear();
+            }
+            self.cache.insert(steps, t);
+        }
+        let t = &self.cache[&steps];
+        let nv = self.nv;
+        phi.copy_from_slice(&t.phi);
+        for p in 0..nd {
+            for v in 0..nv {
+                w[p * nv + v] = (0..nd)
+                    .map(|q| t.gam[p * nd + q] * self.b_in[q * nv + v])
+                    .sum();
+            }
+        }
+    }
 }
 
 /// Sensor readings and drift from node temperatures.
