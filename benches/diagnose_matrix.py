@@ -155,7 +155,8 @@ def main() -> None:
     verdicts = ["thermal_lag", "ambient_coupling", "speed_growth", "unmodeled_source",
                 "nonlinear_expansion", "sensor_drift", "none", "unexplained"]
     table: dict[str, Counter] = {h: Counter() for h in syn.HIDDEN}
-    col_ok = col_n = moved = 0
+    col_ok = col_n = 0
+    moved: list[str] = []
     times = []
     gains: dict[str, list[float]] = {h: [] for h in syn.HIDDEN}
     for topo in ("vmc", "lathe"):
@@ -166,7 +167,8 @@ def main() -> None:
                 times.append(dt_s)
                 table[h][d.verdict] += 1
                 gains[h].append(d.gain_pct)
-                moved += not d.baseline_unique
+                if not d.baseline_unique:
+                    moved.append(f"{topo}/{h}/{seed} ({d.verdict})")
                 if c.column:
                     col_n += 1
                     col_ok += d.column == c.column
@@ -174,7 +176,8 @@ def main() -> None:
     for h in syn.HIDDEN:
         print(f"{h:<20}" + "".join(f"{table[h][v]:>13}" for v in verdicts) + f"   {sum(gains[h]) / len(gains[h]):8.1f}")
     print(f"column right: {col_ok}/{col_n}; time per diagnosis: mean {sum(times) / len(times):.2f} s, max {max(times):.2f} s")
-    print(f"baseline not unique (a second start ends elsewhere held out): {moved}/{len(times)}")
+    print(f"baseline not unique (a second start ends elsewhere held out, or a start stops at the "
+          f"iteration limit): {len(moved)}/{len(times)}" + (f": {', '.join(moved)}" if moved else ""))
 
 
 if __name__ == "__main__":

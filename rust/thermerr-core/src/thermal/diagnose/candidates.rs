@@ -513,6 +513,7 @@ fn scored(
         mates,
         mate_of,
         fit,
+        converged: cal.converged,
         holdout: h,
         calibration: cal,
         spec: Some(spec),

@@ -3,27 +3,23 @@
 use super::rounds::{Accepted, Round, MIN_SHARE_OF_EXCESS};
 use super::verdict::{supported, Verdict};
 use super::{
-    BaselineNetwork, Candidate, Holdout, NetworkRule, NetworkUsed, SECOND_START_FACTOR,
-    TRAINING_TIE,
+    BaselineNetwork, Candidate, Fit, Holdout, NetworkRule, NetworkUsed, StartCheck,
+    SECOND_START_FACTOR, TRAINING_TIE,
 };
 
 /// Which network the baseline has, when it is not the default (recalibrated on the axis).
 pub fn network(b: &BaselineNetwork, axis: &str) -> String {
     match (b.rule, b.recalibrated_rmse_um, b.kept_rmse_um) {
         (NetworkRule::Auto, Some(r), Some(k)) if b.network == NetworkUsed::Kept => {
-            let (ratio, moved) = b
+            let why = b
                 .second_start
                 .as_ref()
-                .map_or((f64::NAN, f64::NAN), |s| (s.training_ssr_ratio, s.rmse_um));
+                .map_or_else(String::new, |s| not_unique(s, r, axis));
             format!(
                 " The network was identified from data, and its recalibration on this axis is not \
-                 unique: started with every network parameter {:.0} % off, it fits the training \
-                 rows as well (SSR {ratio:.2}x, within {tie:.0} % or better) and holds out {moved:.2} µm on {axis} \
-                 against {r:.2} µm. The training rows cannot choose between the two, so the \
+                 unique: {why}. The training rows cannot choose a recalibrated network, so the \
                  baseline keeps the identified network (rule `auto`; only its start and the \
-                 drift map fitted), which has one solution: {k:.2} µm held out.",
-                100.0 * (SECOND_START_FACTOR - 1.0),
-                tie = 100.0 * (TRAINING_TIE - 1.0),
+                 drift map fitted), which has one solution: {k:.2} µm held out."
             )
         }
         (NetworkRule::Recalibrate | NetworkRule::Auto, _, _) => String::new(),
@@ -52,19 +48,53 @@ pub fn network(b: &BaselineNetwork, axis: &str) -> String {
 pub fn second_start(b: &BaselineNetwork, first: &Holdout, axis: &str) -> String {
     match &b.second_start {
         Some(s) if !s.unique && b.network == NetworkUsed::Recalibrated => format!(
-            " The baseline's calibration is not unique on this run: started with every network \
-             parameter {:.0} % off the machine file's values, it fits the training rows as well \
-             (SSR {:.2}x, within {tie:.0} % or better) and holds out {:.2} µm on {axis} against {:.2} µm. The training \
-             rows do not pin the network down, and what is named here was found from the file's \
-             values; `--network keep` or `best` (for a network identified from this run, or one \
-             you trust) gives a baseline with one solution.",
+            " The baseline's calibration is not unique on this run: {}. The training rows do not \
+             pin the network down, and what is named here was found from the file's values; \
+             `--network keep` or `best` (for a network identified from this run, or one you \
+             trust) gives a baseline with one solution.",
+            not_unique(s, first.rmse_um, axis)
+        ),
+        _ => String::new(),
+    }
+}
+
+/// How many of round 1's full fits stopped at the iteration limit (nothing when none did).
+pub fn unsettled(cands: &[Candidate]) -> String {
+    let full = cands.iter().filter(|c| c.fit == Fit::Full).count();
+    let stopped = cands
+        .iter()
+        .filter(|c| c.fit == Fit::Full && !c.converged)
+        .count();
+    match stopped {
+        0 => String::new(),
+        _ => format!(
+            " {stopped} of round 1's {full} full fits stopped at the iteration limit before \
+             settling and are scored where they stopped (`converged: false` in the candidates): \
+             their figures are not those of a settled fit."
+        ),
+    }
+}
+
+/// Why a recalibration is not unique (`first`: its held-out RMS from the file's values).
+fn not_unique(s: &StartCheck, first: f64, axis: &str) -> String {
+    if !s.converged {
+        format!(
+            "from the file's values or from every network parameter {:.0} % off, the search \
+             stopped at its iteration limit without settling (held out {first:.2} and {:.2} µm \
+             on {axis}), so where it stopped is no solution to rely on",
+            100.0 * (SECOND_START_FACTOR - 1.0),
+            s.rmse_um,
+        )
+    } else {
+        format!(
+            "started with every network parameter {:.0} % off the machine file's values, it fits \
+             the training rows as well (SSR {:.2}x, within {tie:.0} % or better) and holds out \
+             {:.2} µm on {axis} against {first:.2} µm",
             100.0 * (SECOND_START_FACTOR - 1.0),
             s.training_ssr_ratio,
             s.rmse_um,
-            first.rmse_um,
             tie = 100.0 * (TRAINING_TIE - 1.0),
-        ),
-        _ => String::new(),
+        )
     }
 }
 

@@ -220,10 +220,14 @@ pub struct StartCheck {
     /// Its normalised training SSR over the first start's (below 1: the second fits the
     /// training rows better).
     pub training_ssr_ratio: f64,
-    /// No second solution: the second start fits the training rows worse than the first (by
-    /// more than [`TRAINING_TIE`]), or ends within [`START_SPREAD`] (or the probe noise) of it
-    /// held out. `false`: the training rows fit as well or better from the second start and the
-    /// held-out figures differ, so the training rows do not pin the network down.
+    /// Both starts stopped by the search's tolerances, not at its iteration limit.
+    pub converged: bool,
+    /// One solution: both starts converged, and the second fits the training rows worse than
+    /// the first (by more than [`TRAINING_TIE`]) or ends within [`START_SPREAD`] (or the probe
+    /// noise) of it held out. `false`: a start stopped at the iteration limit (the search does
+    /// not settle, so where it stops says nothing of a solution), or the training rows fit as
+    /// well or better from the second start and the held-out figures differ, so the training
+    /// rows do not pin the network down.
     pub unique: bool,
 }
 
@@ -232,10 +236,12 @@ impl StartCheck {
         let (r1, r2) = (first.1.rmse_um, second.1.rmse_um);
         let tol = (START_SPREAD * r1).max(first.0.sigma_e);
         let ratio = second.0.ssr / first.0.ssr.max(f64::MIN_POSITIVE);
+        let converged = first.0.converged && second.0.converged;
         StartCheck {
             rmse_um: r2,
             training_ssr_ratio: ratio,
-            unique: ratio > TRAINING_TIE || (r2 - r1).abs() <= tol,
+            converged,
+            unique: converged && (ratio > TRAINING_TIE || (r2 - r1).abs() <= tol),
         }
     }
 }
@@ -411,6 +417,9 @@ pub struct Candidate {
     pub parameters: BTreeMap<String, f64>,
     /// How it was fitted: `screen` (network held) or `full` (network refitted with it).
     pub fit: Fit,
+    /// Whether its calibration stopped by the search's tolerances (`false`: at the iteration
+    /// limit, scored where it stopped).
+    pub converged: bool,
     #[serde(skip)]
     pub calibration: Calibration,
     /// The extended machine before fitting and its extra parameters (those of the causes
@@ -805,6 +814,7 @@ fn diagnose_on(
         !outcome.causes.is_empty(),
         opts.min_score,
     ));
+    evidence.push_str(&evidence::unsettled(&cands));
     evidence.push_str(&evidence::network(&baseline_network, &axis));
     evidence.push_str(&evidence::second_start(
         &baseline_network,
@@ -945,6 +955,7 @@ pub(crate) mod tests {
             holdout,
             parameters: BTreeMap::new(),
             fit: Fit::Full,
+            converged: true,
             calibration: Calibration {
                 machine,
                 init: Vec::new(),
@@ -1009,6 +1020,18 @@ pub(crate) mod tests {
         // within the tie it fits as well
         let tie = StartCheck::of((&cal(100.0), &holdout(2.0)), (&cal(104.0), &holdout(4.0)));
         assert!(!tie.unique);
+        // a start that stopped at the iteration limit is no solution, whatever its figures
+        let stopped = Calibration {
+            converged: false,
+            ..cal(100.0)
+        };
+        for (a, b) in [(&stopped, &c1), (&c1, &stopped)] {
+            let s = StartCheck::of((a, &holdout(2.0)), (b, &holdout(2.0)));
+            assert!(!s.converged && !s.unique);
+        }
+        let worse = StartCheck::of((&c2, &holdout(2.0)), (&stopped, &holdout(4.0)));
+        assert!(!worse.unique && worse.training_ssr_ratio > TRAINING_TIE);
+        assert!(check(2.0, 2.0).converged);
     }
 
     #[test]
@@ -1023,7 +1046,7 @@ pub(crate) mod tests {
         );
         assert!(
             v.ends_with(
-                r#""delta_bic":-20.0,"sensor_gain_pct":null,"rmse_um":1.0,"parameters":{},"fit":"full"}"#
+                r#""delta_bic":-20.0,"sensor_gain_pct":null,"rmse_um":1.0,"parameters":{},"fit":"full","converged":true}"#
             ),
             "{v}"
         );
