@@ -721,8 +721,9 @@ def build_parser() -> argparse.ArgumentParser:
                          "<axis>.report.html, <axis>.calibrated.toml, <axis>.extended.toml")
     dg.add_argument("--network", choices=NETWORK_RULES, default="auto",
                     help="the baseline's thermal network: auto (default): recalibrate, but keep a network "
-                         "`thermerr init` identified when its recalibration is not unique (a second start fits "
-                         "the training rows as well and holds out differently); recalibrate it on the training "
+                         "`thermerr init` identified when its recalibration is not unique (a start stops at the "
+                         "iteration limit, or a second start fits the training rows as well and holds out "
+                         "differently); recalibrate it on the training "
                          "rows and the axis, keep it as the machine file gives it (only the start and the drift map "
                          "fitted: a network `thermerr init` identified from this run, or one you trust), or "
                          "best: both, and the one with the smaller held-out residual of the error and the "

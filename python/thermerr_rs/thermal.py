@@ -209,10 +209,11 @@ class Diagnosis:
 
     @property
     def baseline_unique(self) -> bool:
-        """False when the baseline is recalibrated and, calibrated again from a second start (every
-        network parameter 25 % off the file's values), fits the training rows as well (within 5 %) or better and
-        holds out differently (``report["baseline_network"]["second_start"]``); True otherwise, and
-        for a kept or shared network (one solution)."""
+        """False when the baseline is recalibrated and either start of its calibration (the file's
+        values, and every network parameter 25 % off them) stopped at the iteration limit, or the
+        second start fits the training rows as well (within 5 %) or better and holds out
+        differently (``report["baseline_network"]["second_start"]``); True otherwise, and for a
+        kept or shared network (one solution)."""
         bn = self.report["baseline_network"]
         return bn["network"] != "recalibrated" or bool(bn.get("second_start", {}).get("unique", True))
 
@@ -269,7 +270,8 @@ def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: st
     ``holdout_fraction`` of ``run``. ``network``: the baseline's thermal network —
     ``"auto"`` (default: as ``"recalibrate"``, except that a network identified from data
     (:meth:`Machine.identify`, ``thermerr init``) is kept when its recalibration is not unique:
-    a second start fits the training rows as well and holds out differently),
+    a start stops at the iteration limit, or a second start fits the training rows as well and
+    holds out differently),
     ``"recalibrate"`` (every capacity, conductance and source fitted on the training rows
     and this axis; ``report["baseline_network"]["second_start"]`` says whether a second start
     ends elsewhere), ``"keep"`` (the machine's network as given, only the initial offsets and the
@@ -349,9 +351,10 @@ class AxesDiagnosis:
         text = "\n\n".join(f"== {a} ==\n{d._text()}" for a, d in self.by_axis.items())
         moved = [a for a, d in self.by_axis.items() if not d.baseline_unique]
         if moved:
-            text += (f"\nnote: the recalibrated baseline is not unique on {', '.join(moved)}: from a second start "
-                     "it fits the training rows as well (within 5 %) or better and holds out differently (see each axis's "
-                     "evidence); --network best or keep gives a baseline with one solution")
+            text += (f"\nnote: the recalibrated baseline is not unique on {', '.join(moved)}: a start stopped at "
+                     "the iteration limit, or from a second start it fits the training rows as well (within 5 %) or "
+                     "better and holds out differently (see each axis's evidence); --network best or keep gives a "
+                     "baseline with one solution")
         return text + (_identified_line() if self.report["identified"] else "")
 
 
