@@ -348,7 +348,13 @@ impl RbfValidParams {
         let n = x.nrows();
         let pool = self.candidate_pool(x)?;
         let lanes = pool.len() < n;
-        let dot = |a: &[f64], b: &[f64]| if lanes { dot8(a, b) } else { dot_seq(a, b) };
+        let dot = |a: &[f64], b: &[f64]| {
+            if lanes {
+                crate::linalg::dot(a, b)
+            } else {
+                dot_seq(a, b)
+            }
+        };
         let cap = self.max_neurons.unwrap_or(n).min(pool.len());
         let mean = y.iter().sum::<f64>() / n as f64;
         let mut resid: Vec<f64> = y.iter().map(|v| v - mean).collect();
@@ -430,28 +436,6 @@ impl RbfValidParams {
 #[inline]
 fn dot_seq(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(a, b)| a * b).sum()
-}
-
-/// Σ aᵢbᵢ in eight interleaved partial sums (a fixed order the compiler vectorises).
-#[cfg(feature = "fit")]
-#[inline]
-fn dot8(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let mut acc = [0.0_f64; 8];
-    let (ac, bc) = (a.chunks_exact(8), b.chunks_exact(8));
-    let (ar, br) = (ac.remainder(), bc.remainder());
-    for (x, y) in ac.zip(bc) {
-        let (x, y): (&[f64; 8], &[f64; 8]) = (x.try_into().unwrap(), y.try_into().unwrap());
-        for ((s, x), y) in acc.iter_mut().zip(x).zip(y) {
-            *s += x * y;
-        }
-    }
-    let mut tail = 0.0;
-    for (x, y) in ar.iter().zip(br) {
-        tail += x * y;
-    }
-    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
 }
 
 impl RbfModel {
@@ -608,12 +592,12 @@ mod tests {
     }
 
     #[test]
-    fn dot8_is_a_dot_product() {
+    fn the_lane_dot_is_a_dot_product() {
         let a: Vec<f64> = (0..37).map(|i| (i as f64).sin()).collect();
         let b: Vec<f64> = (0..37).map(|i| (i as f64 * 0.3).cos()).collect();
         for k in [0, 1, 7, 8, 9, 16, 37] {
             assert_relative_eq!(
-                dot8(&a[..k], &b[..k]),
+                crate::linalg::dot(&a[..k], &b[..k]),
                 dot_seq(&a[..k], &b[..k]),
                 epsilon = 1e-12
             );
