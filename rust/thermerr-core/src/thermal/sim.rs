@@ -239,7 +239,7 @@ const CHAIN_SPAN: i64 = 4096;
 
 /// The time axis on a grid of `q` seconds, a power of two near 1/1000 of the mean step.
 ///
-/// Each distinct step length needs its own matrix exponential; a logger that jitters (±0.5 s on
+/// Each distinct step length needs its own transition (Φ, Γ); a logger that jitters (±0.5 s on
 /// 60-s samples) would make every step distinct. On the grid, a run on whole (or binary-fraction)
 /// seconds keeps its exact steps, and a jittered one has a few dozen distinct step lengths; each
 /// time moves by at most q/2 (30 ms at 60-s sampling) and the moves do not accumulate, because
