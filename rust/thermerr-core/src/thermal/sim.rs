@@ -531,7 +531,20 @@ impl March<'_> {
         let n_t = out.len() / nn;
         let mut phi = vec![0.0; nd * nd];
         let mut w = vec![0.0; nd * nv];
-        let mut xn = vec![0.0; nd];
+        // the next state on the stack for a small network (the loop below then keeps it in
+        // registers: about 1.5 times faster than a heap buffer, the same operations in the same
+        // order), on the heap for a large one
+        let mut small = [0.0; 8];
+        let mut big = if nd > small.len() {
+            vec![0.0; nd]
+        } else {
+            Vec::new()
+        };
+        let xn: &mut [f64] = if nd <= small.len() {
+            &mut small[..nd]
+        } else {
+            &mut big[..]
+        };
         let mut cur_steps: Option<i64> = None;
         for k in 0..n_t {
             let row = &mut out[k * nn..(k + 1) * nn];
@@ -567,7 +580,7 @@ impl March<'_> {
                 }
                 xn[p] = acc;
             }
-            x[..nd].copy_from_slice(&xn);
+            x[..nd].copy_from_slice(xn);
         }
         Ok(())
     }
