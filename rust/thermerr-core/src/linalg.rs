@@ -123,16 +123,18 @@ pub fn lstsq_with_prior(
     };
     let mut x = vec![0.0; nb];
     let mut r: Vec<f64> = y[..rows].to_vec();
-    for _ in 0..2 {
+    for refine in [false, true] {
+        if refine {
+            // the data residual of the first solution, for the refinement
+            for (c, xj) in cols.iter().zip(&x) {
+                for (ri, ci) in r.iter_mut().zip(&c[..rows]) {
+                    *ri -= xj * ci;
+                }
+            }
+        }
         let d = chol.solve(&rhs(&r, &x));
         for (j, xj) in x.iter_mut().enumerate() {
             *xj += d[(j, 0)];
-        }
-        r.copy_from_slice(&y[..rows]);
-        for (c, xj) in cols.iter().zip(&x) {
-            for (ri, ci) in r.iter_mut().zip(&c[..rows]) {
-                *ri -= xj * ci;
-            }
         }
     }
     if x.iter().all(|v| v.is_finite()) {
