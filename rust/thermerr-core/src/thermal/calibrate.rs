@@ -73,6 +73,11 @@ pub struct CalibrationOptions {
     /// Fit the error axis with the temperatures (false: the search sees the temperatures alone,
     /// and the axis's drift map is solved once on the network it ends with).
     pub fit_error: bool,
+    /// Also stop when a step lowers the fit's BIC by less than this (0: only the fixed
+    /// tolerances). BIC = n·ln(SSR/n) + …, so a step's ΔBIC ≈ n·ΔSSR/SSR: on a run whose model
+    /// misfits by far more than the noise (SSR/n ≫ 1), the fixed absolute tolerance
+    /// ([`CALIBRATION_ATOL`]) asks for cost decreases that move the BIC by a millionth.
+    pub min_bic_step: f64,
 }
 
 impl Default for CalibrationOptions {
@@ -89,6 +94,7 @@ impl Default for CalibrationOptions {
             max_iter: 100,
             thermal: true,
             fit_error: true,
+            min_bic_step: 0.0,
         }
     }
 }
@@ -116,6 +122,12 @@ impl CalibrationOptions {
             return Err(Error::param(
                 "prior_log_sigma",
                 format!("must be > 0, got {}", self.prior_log_sigma),
+            ));
+        }
+        if !(self.min_bic_step.is_finite() && self.min_bic_step >= 0.0) {
+            return Err(Error::param(
+                "min_bic_step",
+                format!("must be >= 0, got {}", self.min_bic_step),
             ));
         }
         if self.max_iter == 0 {
@@ -265,16 +277,16 @@ fn fit_drift(
     let terms = drift_terms(m, spec, run, temps)?;
     let mut basis: Vec<Vec<f64>> = Vec::new();
     let mut prior: Vec<(f64, f64)> = Vec::new();
-    for ((c, s), label) in terms.lagged.iter().zip(&terms.labels_lagged) {
+    for ((c, s), label) in terms.lagged.into_iter().zip(&terms.labels_lagged) {
         basis.push(match spec.lag_s {
-            Some(tau) => lag(run.time, s, tau),
-            None => s.clone(),
+            Some(tau) => lag(run.time, &s, tau),
+            None => s,
         });
-        prior.push(prior_of(label, *c));
+        prior.push(prior_of(label, c));
     }
-    for ((c, s), label) in terms.instant.iter().zip(&terms.labels_instant) {
-        basis.push(s.clone());
-        prior.push(prior_of(label, *c));
+    for ((c, s), label) in terms.instant.into_iter().zip(&terms.labels_instant) {
+        basis.push(s);
+        prior.push(prior_of(label, c));
     }
     let nb = basis.len();
     if nb == 0 {
@@ -531,9 +543,11 @@ fn calibrate_all_rows(
         let x0: Vec<f64> = free.iter().map(|f| f.start.clamp(f.lo, f.hi)).collect();
         let lo: Vec<f64> = free.iter().map(|f| f.lo).collect();
         let hi: Vec<f64> = free.iter().map(|f| f.hi).collect();
+        // a step's ΔBIC ≈ n·ΔSSR/SSR: n times the relative decrease of the cost
+        let n_data = rows * (tg.sensors.len() + usize::from(opts.fit_error));
         let lm = LmOptions {
             max_iter: opts.max_iter,
-            ftol: 1e-9,
+            ftol: (opts.min_bic_step / n_data as f64).max(1e-9),
             atol: CALIBRATION_ATOL,
             ..LmOptions::default()
         };
