@@ -338,3 +338,80 @@ fn the_first_rows_simulate_as_on_the_whole_run() {
     assert_eq!(head.temps[..], full.temps[..41 * 2]);
     assert_eq!(head.drift[0].1[..], full.drift[0].1[..41]);
 }
+
+#[test]
+fn a_bic_step_stops_a_misfit_calibration_sooner_and_costs_it_little() {
+    // a run the network cannot explain (a slow swing on the error axis and the sensor, far above
+    // the noise): the fixed tolerance keeps the search crawling; a minimum BIC step of 0.1 stops
+    // it sooner, and the BIC it ends with is within a tenth of the evidence rule's 10
+    use thermerr_core::thermal::calibrate::{calibrate, CalibrationOptions};
+    let mut m = Machine::from_toml(TWO_NODES, "two.toml").unwrap();
+    let n = 600;
+    let t: Vec<f64> = (0..n).map(|k| k as f64 * 60.0).collect();
+    let rpm: Vec<f64> = (0..n)
+        .map(|k| [0.0, 3000.0, 6000.0][(k / 70) % 3])
+        .collect();
+    let truth = {
+        let r = run(vec![
+            ("time_s", t.clone()),
+            ("T_hot", vec![20.0; n]),
+            ("U_rpm", rpm.clone()),
+            ("E_x", vec![0.0; n]),
+        ]);
+        simulate(&m, &RunView::new(&r), &Init::FirstReading).unwrap()
+    };
+    let swing = |k: usize, a: f64| a * (2.0 * std::f64::consts::PI * t[k] / 20_000.0).sin();
+    let wobble = |k: usize| 0.02 * ((k * 7919) % 13) as f64 / 13.0;
+    let hot: Vec<f64> = (0..n)
+        .map(|k| truth.sensors[0].1[k] + swing(k, 0.4) + wobble(k))
+        .collect();
+    let e: Vec<f64> = (0..n)
+        .map(|k| truth.drift[0].1[k] + swing(k, 3.0) + wobble(k))
+        .collect();
+    let r = run(vec![
+        ("time_s", t),
+        ("T_hot", hot),
+        ("U_rpm", rpm),
+        ("E_x", e),
+    ]);
+    // start the search off the truth, so that it has a way to go
+    m.nodes[0].capacity_j_per_k *= 2.0;
+    m.links[0].w_per_k *= 0.5;
+    let fit = |step: f64| {
+        let opts = CalibrationOptions {
+            axis: "E_x".into(),
+            min_bic_step: step,
+            ..CalibrationOptions::default()
+        };
+        calibrate(&m, &RunView::new(&r), &opts, None).unwrap()
+    };
+    let (settled, stepped) = (fit(0.0), fit(0.1));
+    assert!(
+        settled.ssr / settled.n_data as f64 > 100.0,
+        "the run must misfit far above the noise: SSR/n = {}",
+        settled.ssr / settled.n_data as f64
+    );
+    assert!(
+        stepped.n_iter < settled.n_iter,
+        "{} !< {} iterations",
+        stepped.n_iter,
+        settled.n_iter
+    );
+    let d = stepped.bic() - settled.bic();
+    assert!(
+        d.abs() < 1.0,
+        "BIC {} against {}",
+        stepped.bic(),
+        settled.bic()
+    );
+    // a negative step is refused
+    let opts = CalibrationOptions {
+        axis: "E_x".into(),
+        min_bic_step: -1.0,
+        ..CalibrationOptions::default()
+    };
+    let err = calibrate(&m, &RunView::new(&r), &opts, None)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("min_bic_step"), "{err}");
+}
