@@ -163,8 +163,8 @@ where
             if c.len() != m {
                 return Err(Error::Shape("the residual vector changed length".into()));
             }
-            for i in 0..m {
-                jac[(i, j)] = if c[i].is_finite() { c[i] } else { 0.0 };
+            for (d, v) in jac.col_as_slice_mut(j).iter_mut().zip(&c) {
+                *d = if v.is_finite() { *v } else { 0.0 };
             }
         }
         let jtj = jac.transpose() * &jac;

@@ -434,8 +434,13 @@ fn normalised(
         let (off, drift) = (node.sensor_offset_k, node.sensor_drift_k_per_h);
         let rows_of = temps.chunks_exact(nn).zip(meas).take(rows);
         if drift == 0.0 {
-            // the drift term is ±0 then: the same numbers without it (the inner loop's cost)
-            r.extend(rows_of.map(|(t, mk)| (t[i] + off - mk) / sigma_t));
+            // the drift term is ±0 then: the same numbers without it (the inner loop's cost);
+            // the node's column gathered first, so that the arithmetic runs on contiguous data
+            let start = r.len();
+            r.extend(rows_of.map(|(t, _)| t[i]));
+            for (v, mk) in r[start..].iter_mut().zip(meas) {
+                *v = (*v + off - mk) / sigma_t;
+            }
         } else {
             r.extend(rows_of.zip(run.time).map(|((t, mk), tk)| {
                 (t[i] + off + drift * (tk - run.time[0]) / 3600.0 - mk) / sigma_t
