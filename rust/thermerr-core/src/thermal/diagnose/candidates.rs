@@ -291,12 +291,16 @@ fn warm_start(mut free: Vec<FreeParam>, base: &Calibration) -> Vec<FreeParam> {
 }
 
 /// Calibrates one extension on `train` (the whole network refitted with it, from the current
-/// model's values) and scores it on the held-out data.
+/// model's values) and scores it on the held-out data. `screened`: the extension's screening
+/// fit, which the full fit nests (the same model with the network held): a full fit that ends
+/// fitting the training rows worse than it stopped in a poorer minimum, and is searched again
+/// from the screen's values; the better of the two is kept.
 pub(super) fn fit(
     spec: Spec,
     base: &Baseline<'_>,
     train: &RunView<'_>,
     held: &HeldOut<'_, '_>,
+    screened: Option<&Calibration>,
 ) -> Result<Candidate> {
     let with_extra = |mut f: Vec<FreeParam>| {
         f.extend(spec.extra.iter().cloned());
@@ -305,6 +309,13 @@ pub(super) fn fit(
     let nominal = default_params(&spec.machine, &base.options);
     let warm = with_extra(warm_start(nominal.clone(), base.calibration));
     let mut cal = calibrate(&spec.machine, train, &base.options, Some(warm))?;
+    if let Some(sc) = screened.filter(|sc| cal.ssr > sc.ssr) {
+        let from_screen = warm_start(with_extra(nominal.clone()), sc);
+        let again = calibrate(&spec.machine, train, &base.options, Some(from_screen))?;
+        if again.ssr < cal.ssr {
+            cal = again;
+        }
+    }
     if spec.cause == Cause::SensorDrift {
         // a drifting sensor biases the baseline itself: also fit from the nominal start
         let cold = calibrate(

@@ -662,7 +662,7 @@ fn round_candidates(
             let spec = c
                 .spec
                 .ok_or_else(|| Error::Numerical("a screened candidate lost its spec".into()))?;
-            let c = candidates::fit(spec, base, train, cx.held);
+            let c = candidates::fit(spec, base, train, cx.held, Some(&c.calibration));
             progress::step(cx.progress);
             c
         })

@@ -242,7 +242,7 @@ where
                     base.options.clone(),
                     axis_index,
                 );
-                let reduced = candidates::fit(Spec { extra, ..spec }, &b, cx.train, cx.held);
+                let reduced = candidates::fit(Spec { extra, ..spec }, &b, cx.train, cx.held, None);
                 progress::step(opts.progress.as_deref());
                 let reduced = reduced?;
                 let full = against(&joint, &reduced.calibration, &reduced.holdout);
