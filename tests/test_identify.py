@@ -13,7 +13,7 @@ topology           cause       identified (seeds 1, 2)     nominal TOML (seeds 1
 vmc                ambient     2/2                         2/2
 vmc                unmodeled   2/2                         2/2
 vmc                lag         2/2                         2/2
-vmc                drift       1/2 (seed 1: unexplained)   2/2
+vmc                drift       1/2 (seed 1: a source)      2/2
 vmc                none        1/2 (seed 1: ambient)       2/2
 lathe              ambient     2/2                         2/2
 lathe              unmodeled   0/2 (none, unexplained)     2/2
@@ -24,7 +24,10 @@ all                            16/20                       20/20
 =================  ==========  ==========================  ==========================
 
 Measured 2026-11-26 after the simulation's step and the drift map's solve were rewritten for
-speed (the same equations, other roundings). Before that: 15/20 against 19/20 (VMC 8/10 against
+speed (the same equations, other roundings), and again after the candidates' BIC stop and the
+full fit's second search from its screen (the same counts; the VMC drift of seed 1, which the
+identified network misses, is now called an unmodelled source where it was ``unexplained``:
+its recalibration is not unique there, so the identified network is kept). Before that: 15/20 against 19/20 (VMC 8/10 against
 9/10, lathe 7/10 against 10/10); the rewrite moved a nominal VMC case (the ambient coupling,
 seed 1) to named and an identified lathe sensor drift (seed 1) to named, so the identified VMC is
 now two cases short of the nominal, as the lathe is. (It was 8/20 against 19/20 before
