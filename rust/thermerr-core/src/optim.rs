@@ -142,6 +142,8 @@ where
     let mut message = String::from("reached max_iter");
     let mut converged = false;
     let mut iter = 0;
+    // one Jacobian for every iteration: each column is overwritten whole (its length is checked)
+    let mut jac = Mat::<f64>::zeros(m, n);
     while iter < opts.max_iter {
         iter += 1;
         crate::interrupt::check()?;
@@ -157,7 +159,6 @@ where
             })
             .collect();
         n_eval += n;
-        let mut jac = Mat::<f64>::zeros(m, n);
         for (j, c) in cols.into_iter().enumerate() {
             let c = c?;
             if c.len() != m {
