@@ -59,6 +59,16 @@ pub fn lstsq(a: MatRef<'_, f64>, b: &[f64]) -> Result<Vec<f64>> {
     Ok(x)
 }
 
+/// Whether every value is finite: the exponent bits tested over blocks without an early exit
+/// per value (which keeps a scan over a whole simulation from vectorising).
+pub fn all_finite(xs: &[f64]) -> bool {
+    const EXP: u64 = 0x7ff0_0000_0000_0000;
+    xs.chunks(64).all(|c| {
+        !c.iter()
+            .fold(false, |bad, v| bad | (v.to_bits() & EXP == EXP))
+    })
+}
+
 /// Σ aᵢ·bᵢ over the shorter of the two, in eight interleaved partial sums (which the compiler
 /// turns into vector instructions; a single running sum cannot be reordered).
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
@@ -187,6 +197,23 @@ fn finite_vec(x: MatRef<'_, f64>, what: &str) -> Result<Vec<f64>> {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn all_finite_finds_any_non_finite_value_anywhere() {
+        let mut xs: Vec<f64> = (0..200).map(|k| k as f64 * 1e300 - 1e302).collect();
+        xs.push(f64::MAX);
+        xs.push(f64::MIN_POSITIVE / 2.0); // subnormal: finite
+        assert!(all_finite(&xs));
+        assert!(all_finite(&[]));
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            for at in [0, 63, 64, 150, xs.len() - 1] {
+                let mut ys = xs.clone();
+                ys[at] = bad;
+                assert!(!all_finite(&ys), "{bad} at {at}");
+                assert_eq!(all_finite(&ys), ys.iter().all(|v| v.is_finite()));
+            }
+        }
+    }
 
     #[test]
     fn overdetermined_full_rank() {

@@ -422,7 +422,7 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         8 => march.run::<8>(&mut x, &mut out)?,
         _ => march.run::<0>(&mut x, &mut out)?,
     }
-    if out.iter().any(|v| !v.is_finite()) {
+    if !crate::linalg::all_finite(&out) {
         return Err(Error::Numerical(
             "the simulation produced non-finite temperatures".into(),
         ));
