@@ -1,7 +1,7 @@
 //! The English sentence that states the verdict and the figures behind it.
 
 use super::rounds::{Accepted, Round, MIN_SHARE_OF_EXCESS};
-use super::verdict::{supported, Verdict};
+use super::verdict::{supported, Verdict, MAX_DELTA_BIC};
 use super::{
     BaselineNetwork, Candidate, Fit, Holdout, NetworkRule, NetworkUsed, StartCheck,
     SECOND_START_FACTOR, TRAINING_TIE,
@@ -158,18 +158,30 @@ pub fn named(cands: &[Candidate], i: usize, base: &Holdout, axis: &str) -> Strin
 }
 
 /// The sentence for a first named cause that was accepted after round 1 (round 1's cause was
-/// dropped by the backward check); `last`: the final model's held-out figures.
-pub fn named_later(c: &Accepted, base: &Holdout, last: &Holdout, axis: &str) -> String {
+/// dropped by the backward check); `last`: the final model's held-out figures, with `n_named`
+/// causes in all.
+pub fn named_later(
+    c: &Accepted,
+    base: &Holdout,
+    last: &Holdout,
+    axis: &str,
+    n_named: usize,
+) -> String {
     let params: Vec<String> = c
         .params
         .iter()
         .map(|(k, v)| format!("{k} = {v:.4}"))
         .collect();
     format!(
-        "The first cause that passes the backward check is {} ({}), accepted in round {}; with the other named causes the held-out RMS error of {axis} falls from {:.2} to {:.2} µm.",
+        "The first cause that passes the backward check is {} ({}), accepted in round {}; {} the held-out RMS error of {axis} falls from {:.2} to {:.2} µm.",
         place(c.cause, c.column.as_deref(), c.node.as_deref()),
         params.join(", "),
         c.round,
+        if n_named > 1 {
+            "with the other named causes"
+        } else {
+            "on its own (the only cause named)"
+        },
         base.rmse_um,
         last.rmse_um
     )
@@ -229,9 +241,12 @@ pub fn rounds(
     }
     for d in dropped {
         out.push_str(&format!(
-            " {} (round {}) is dropped: refitted without it, the other causes explain the held-out data as well.",
+            " {} (round {}) is dropped: refitted without it, the other causes leave too little for it to pass a round's rule again ({:.0} % of what stays above the probe noise, {:.0} % of the normalised held-out residual, ΔBIC below {:.0}).",
             place(d.cause, d.column.as_deref(), d.node.as_deref()),
-            d.round
+            d.round,
+            100.0 * MIN_SHARE_OF_EXCESS,
+            100.0 * min_score,
+            MAX_DELTA_BIC
         ));
     }
     if named && remainder_um > 0.0 {
@@ -276,7 +291,7 @@ pub fn unnamed(
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::{baseline, candidate};
+    use super::super::tests::{baseline, candidate, holdout};
     use super::*;
     use crate::thermal::diagnose::Cause;
 
@@ -301,6 +316,37 @@ mod tests {
             s.contains("(best: unmodeled_source 45 %, which does not cut"),
             "{s}"
         );
+    }
+
+    #[test]
+    fn a_later_cause_left_alone_and_a_dropped_one_are_said_as_they_are() {
+        let accepted = |round: usize, column: &str| Accepted {
+            cause: Cause::UnmodeledSource,
+            column: Some(column.into()),
+            node: Some("t8".into()),
+            axis: "E_z".into(),
+            gain_pct: 30.0,
+            params: Default::default(),
+            round,
+            rmse_um: 1.0,
+            spec: None,
+        };
+        let (base, last) = (baseline(), holdout(1.5));
+        let alone = named_later(&accepted(3, "T_t5"), &base, &last, "E_z", 1);
+        assert!(
+            alone.contains("on its own (the only cause named)"),
+            "{alone}"
+        );
+        assert!(alone.contains("from 2.55 to 1.50 µm"), "{alone}");
+        let with = named_later(&accepted(3, "T_t5"), &base, &last, "E_z", 2);
+        assert!(with.contains("with the other named causes"), "{with}");
+        let s = rounds(&[], &[accepted(1, "T_t7")], 0.0, 0.05, "E_z", true, 0.1);
+        assert!(
+            s.contains("(round 1) is dropped")
+                && s.contains("25 % of what stays above the probe noise, 10 % of the normalised held-out residual, ΔBIC below -10"),
+            "{s}"
+        );
+        assert!(!s.contains("as well"), "{s}");
     }
 
     #[test]

@@ -809,7 +809,9 @@ fn diagnose_on(
     let remainder_um = rounds::remainder_um(final_hold, noise, opts);
     let mut evidence = match (chosen, first) {
         (Some(i), _) => evidence::named(&cands, i, &base_hold, &axis),
-        (None, Some(c)) => evidence::named_later(c, &base_hold, final_hold, &axis),
+        (None, Some(c)) => {
+            evidence::named_later(c, &base_hold, final_hold, &axis, outcome.causes.len())
+        }
         (None, None) => {
             evidence::unnamed(verdict, &cands, &base_hold, noise, &axis, opts.min_score)
         }
@@ -932,7 +934,7 @@ pub(crate) mod tests {
     /// The baseline held-out RMS of the constructed candidates.
     const BASE_RMSE: f64 = 2.55;
 
-    fn holdout(rmse_um: f64) -> Holdout {
+    pub fn holdout(rmse_um: f64) -> Holdout {
         Holdout {
             rmse_um,
             ..Holdout::default()
