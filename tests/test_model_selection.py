@@ -10,7 +10,7 @@ import pytest
 
 import thermerr_rs as tr
 from thermerr_rs.errors import ParameterError
-from thermerr_rs.model_selection import Candidate, Entry, candidates, edge_latency, pick, select_model
+from thermerr_rs.model_selection import RIDGE_PATH, Candidate, Entry, candidates, edge_latency, pick, select_model
 
 SENSORS = ["T_s01", "T_s07", "T_s10", "T_s13"]
 
@@ -18,7 +18,7 @@ SENSORS = ["T_s01", "T_s07", "T_s10", "T_s13"]
 def test_the_leaderboard_is_the_time_ordered_cv_of_each_candidate(example_run1):
     run = tr.read_run(example_run1)
     sel = select_model(run, "E_z", SENSORS, families=["mlr", "svr"], cv=4)
-    assert len(sel.leaderboard) == 4 + 9
+    assert len(sel.leaderboard) == len(RIDGE_PATH) + 9
     rms = [e.cv_rms for e in sel.leaderboard]
     assert rms == sorted(rms)
     # recompute the MLR entry by hand on the same splits
@@ -45,7 +45,7 @@ def test_same_seed_same_board(example_run1):
 
 
 def test_history_doubles_the_candidates_and_is_refitted_with_the_winner(example_run1):
-    assert len(candidates(["mlr", "rbf", "svr"], [900.0])) == 2 * (4 + 9 + 9)
+    assert len(candidates(["mlr", "rbf", "svr"], [900.0])) == 2 * (len(RIDGE_PATH) + 9 + 9)
     run = tr.read_run(example_run1)
     sel = select_model(run, "E_z", SENSORS, families=["mlr"], history=[900.0, 3600.0], cv=3)
     best = sel.best.candidate
@@ -109,14 +109,14 @@ def test_cli_model_auto(example_run1, example_run2, tmp_path, capsys):
     board = report["selection"]["leaderboard"]
     # without --history, auto tries every candidate without and with AUTO_HISTORY (900 s, 1 h)
     win = board[report["selection"]["winner"]]
-    assert len(board) == 44 and report["model"] == win["model"] and report["selection"]["rule"] == "1se"
-    assert sum(e["history"] == [900.0, 3600.0] for e in board) == 22
+    assert len(board) == 2 * (len(RIDGE_PATH) + 9 + 9) and report["model"] == win["model"] and report["selection"]["rule"] == "1se"
+    assert sum(e["history"] == [900.0, 3600.0] for e in board) == len(RIDGE_PATH) + 9 + 9
     assert json.loads(out.read_text())["kind"] == win["family"]
     # --history none: the candidates without
     assert main(["fit", str(example_run1), "--axis", "E_z", "--model", "auto", "--sensors", ",".join(SENSORS),
                  "--cv", "3", "--history", "none", "--out", str(out), "--json", "--no-fallbacks"]) == 0
     board = json.loads(capsys.readouterr().out)["selection"]["leaderboard"]
-    assert len(board) == 22 and all(e["history"] is None for e in board)
+    assert len(board) == len(RIDGE_PATH) + 9 + 9 and all(e["history"] is None for e in board)
     # --select min: the lowest CV RMS
     assert main(["fit", str(example_run1), "--axis", "E_z", "--model", "auto", "--sensors", ",".join(SENSORS),
                  "--cv", "3", "--history", "none", "--select", "min", "--out", str(out), "--json",
@@ -133,7 +133,7 @@ def test_cli_model_auto_with_tune(example_run1, tmp_path, capsys):
                  "--cv", "3", "--tune", "pso", "--pop", "4", "--iters", "2", "--history", "none", "--out", str(out),
                  "--json", "--no-fallbacks"]) == 0
     board = json.loads(capsys.readouterr().out)["selection"]["leaderboard"]
-    assert len(board) == 23 and sum(e["tuned"] == ["pso", 4, 2] for e in board) == 1
+    assert len(board) == len(RIDGE_PATH) + 9 + 9 + 1 and sum(e["tuned"] == ["pso", 4, 2] for e in board) == 1
 
 
 def test_cli_model_auto_draws_a_bar_on_a_terminal(example_run1, tmp_path, capsys, monkeypatch):

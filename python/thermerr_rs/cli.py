@@ -601,7 +601,7 @@ def build_parser() -> argparse.ArgumentParser:
     f.add_argument("--seed", type=_nonneg_int, default=0, help="seed of every stochastic step (default 0)")
     f.add_argument("--alpha", type=_nonneg_float, default=0.0,
                    help="MLR: ridge penalty on the slopes, in the units of the centred inputs' sums of squares "
-                        "(default 0: least squares; --model auto tries 1, 10 and 100)")
+                        "(default 0: least squares; --model auto tries 0 and 1 to 1000 in half-decade steps)")
     f.add_argument("--design", choices=["exact", "ols", "kmeans"], default="ols", help="RBF design (default ols)")
     f.add_argument("--spread", type=float, default=1.0, help="RBF spread on [0,1]-scaled inputs (default 1.0)")
     f.add_argument("--goal", type=float, default=None,

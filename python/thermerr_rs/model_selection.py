@@ -57,6 +57,11 @@ RULES: tuple[str, ...] = ("1se", "min")
 #: machine's structure behind its surface sensors; docs/methods.md, the lagged shop run)
 AUTO_HISTORY: tuple[float, ...] = (900.0, 3600.0)
 
+#: the MLR ridge penalties α :func:`select_model` tries (0: least squares), a path in steps of a
+#: half decade as glmnet's is a log grid: the one-standard-error rule takes the strongest ridge
+#: inside its band, so a coarser path makes that pick jump (docs/methods.md, the real run)
+RIDGE_PATH: tuple[float, ...] = (0.0, 1.0, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0)
+
 
 @dataclass(frozen=True)
 class Candidate:
@@ -93,14 +98,14 @@ class Candidate:
 
 def candidates(families: Sequence[str], history: Sequence[float] | None,
                tune: tuple[str, int, int] | None = None) -> list[Candidate]:
-    """The fixed grid: MLR, plain and with a ridge penalty α 1, 10 and 100 (inputs in K: a long
-    history of correlated readings fitted on a short early split extrapolates wildly without
-    one); RBF k-means with 10/20/40 centres × spread 0.5/1/2 (in the inputs'
+    """The fixed grid: MLR along :data:`RIDGE_PATH`, least squares and ridge penalties α from 1
+    to 1000 in half-decade steps (inputs in K: a long history of correlated readings fitted on a
+    short early split extrapolates wildly without one); RBF k-means with 10/20/40 centres × spread 0.5/1/2 (in the inputs'
     units, K of rise); SVR with C 1/10/100 × gamma 0.01/0.1/'scale'; with ``tune`` (method, pop,
     iters) and the SVR family, one more SVR whose C and gamma the swarm searches. With
     ``history``, each again with those time constants."""
     grid: dict[str, list[dict[str, Any]]] = {
-        "mlr": [{}, {"alpha": 1.0}, {"alpha": 10.0}, {"alpha": 100.0}],
+        "mlr": [{"alpha": a} if a else {} for a in RIDGE_PATH],
         "rbf": [{"n_centers": k, "spread": s} for k in (10, 20, 40) for s in (0.5, 1.0, 2.0)],
         "svr": [{"C": c, "gamma": g, "epsilon": 0.1} for c in (1.0, 10.0, 100.0) for g in (0.01, 0.1, "scale")],
     }
