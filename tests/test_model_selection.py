@@ -45,7 +45,13 @@ def test_same_seed_same_board(example_run1):
 
 
 def test_history_doubles_the_candidates_and_is_refitted_with_the_winner(example_run1):
-    assert len(candidates(["mlr", "rbf", "svr"], [900.0])) == 2 * (len(RIDGE_PATH) + 9 + 9)
+    cands = candidates(["mlr", "rbf", "svr"], [900.0])
+    assert len(cands) == 2 * (len(RIDGE_PATH) + 9 + 9)
+    # scored family by family, each without then with history: a budget that runs out cuts the
+    # costly SVRs, not the MLRs with history
+    assert [(c.family, c.history) for c in cands[:2 * len(RIDGE_PATH)]] == \
+        [("mlr", None)] * len(RIDGE_PATH) + [("mlr", (900.0,))] * len(RIDGE_PATH)
+    assert [c.family for c in cands[-18:]] == ["svr"] * 18
     run = tr.read_run(example_run1)
     sel = select_model(run, "E_z", SENSORS, families=["mlr"], history=[900.0, 3600.0], cv=3)
     best = sel.best.candidate

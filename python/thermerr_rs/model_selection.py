@@ -103,7 +103,10 @@ def candidates(families: Sequence[str], history: Sequence[float] | None,
     short early split extrapolates wildly without one); RBF k-means with 10/20/40 centres × spread 0.5/1/2 (in the inputs'
     units, K of rise); SVR with C 1/10/100 × gamma 0.01/0.1/'scale'; with ``tune`` (method, pop,
     iters) and the SVR family, one more SVR whose C and gamma the swarm searches. With
-    ``history``, each again with those time constants."""
+    ``history``, each again with those time constants. In the order they are scored: family by
+    family in ``families``' order (MLR, the cheapest, first), each without and then with
+    history, so a ``budget_s`` that runs out skips the costliest family's last candidates and
+    never the history of the cheap ones (on the real run the winners were MLRs with history)."""
     grid: dict[str, list[dict[str, Any]]] = {
         "mlr": [{"alpha": a} if a else {} for a in RIDGE_PATH],
         "rbf": [{"n_centers": k, "spread": s} for k in (10, 20, 40) for s in (0.5, 1.0, 2.0)],
@@ -116,10 +119,11 @@ def candidates(families: Sequence[str], history: Sequence[float] | None,
     if history:
         hists.append(tuple(float(t) for t in history))
     out: list[Candidate] = []
-    for h in hists:
-        out += [Candidate(f, p, h) for f in families for p in grid[f]]
-        if tune is not None and "svr" in families:
-            out.append(Candidate("svr", {"epsilon": 0.1}, h, tune=tune))
+    for f in families:  # family by family, each without and then with history: cheapest first
+        for h in hists:
+            out += [Candidate(f, p, h) for p in grid[f]]
+            if tune is not None and f == "svr":
+                out.append(Candidate("svr", {"epsilon": 0.1}, h, tune=tune))
     return out
 
 
