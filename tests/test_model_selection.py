@@ -197,3 +197,16 @@ def test_select_model_reports_its_rule_and_winner(example_run1):
     assert "* " + a.best.candidate.label() in a.table()
     with pytest.raises(ParameterError, match="rule must be one of"):
         select_model(run, "E_z", SENSORS, families=["mlr"], rule="best")
+
+
+def test_the_ridge_path_steps_at_most_half_a_decade() -> None:
+    # the one-standard-error rule takes the strongest ridge inside its band, so its pick moves
+    # with the path's steps: on the real run of docs/methods.md a decade grid jumped past the
+    # alpha that every finer log path picked
+    alphas = [a for a in RIDGE_PATH if a > 0]
+    assert RIDGE_PATH[0] == 0.0 and alphas == sorted(alphas)
+    # half decades as rounded numbers: 1, 3, 10, 30, ... (steps of 3 and 10/3 around sqrt(10))
+    assert all(b / a <= 10.0 / 3.0 + 1e-9 for a, b in zip(alphas, alphas[1:]))
+    assert alphas[0] <= 1.0 and alphas[-1] >= 1000.0
+    mlr_alphas = [c.params.get("alpha", 0.0) for c in candidates(["mlr"], None)]
+    assert mlr_alphas == list(RIDGE_PATH)
