@@ -100,8 +100,8 @@ def candidates(families: Sequence[str], history: Sequence[float] | None,
                tune: tuple[str, int, int] | None = None) -> list[Candidate]:
     """The fixed grid: MLR along :data:`RIDGE_PATH`, least squares and ridge penalties α from 1
     to 1000 in half-decade steps (inputs in K: a long history of correlated readings fitted on a
-    short early split extrapolates wildly without one); RBF k-means with 10/20/40 centres × spread 0.5/1/2 (in the inputs'
-    units, K of rise); SVR with C 1/10/100 × gamma 0.01/0.1/'scale'; with ``tune`` (method, pop,
+    short early split extrapolates wildly without one); RBF k-means with 10/20/40 centres ×
+    spread 0.5/1/2 (in the inputs' units, K of rise); SVR with C 1/10/100 × gamma 0.01/0.1/'scale'; with ``tune`` (method, pop,
     iters) and the SVR family, one more SVR whose C and gamma the swarm searches. With
     ``history``, each again with those time constants. In the order they are scored: family by
     family in ``families``' order (MLR, the cheapest, first), each without and then with

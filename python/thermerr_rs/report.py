@@ -49,12 +49,11 @@ def _plots(series: dict[str, Any], report: dict[str, Any]) -> list[tuple[str, st
         return None
 
     def axes(width: float, height: float, fixed: bool = True) -> tuple[Figure, Axes]:
-        """A figure of one plot. ``fixed``: margins set in inches (room for the tick labels,
-        the axis labels and the legend's row above the plot), as the time plots always have the
-        same furniture; a layout engine would draw each figure once more only to measure it
-        (constrained layout: writing the real run's five reports took 2.8 s instead of 2.4 s,
-        medians of five). Otherwise
-        constrained layout, for labels whose length depends on the data."""
+        """A figure of one plot. ``fixed``: margins set in inches (:data:`MARGIN_IN`), as the
+        time plots always have the same furniture; a layout engine would draw each figure once
+        more only to measure it (constrained layout: the real run's five reports took 2.8 s
+        instead of 2.4 s, medians of five). Otherwise constrained layout, for labels whose
+        length depends on the data (the candidates' bar chart)."""
         if not fixed:
             fig = Figure(figsize=(width, height), layout="constrained")
             return fig, fig.subplots()
