@@ -158,3 +158,31 @@ def test_report_without_matplotlib(small, tmp_path, monkeypatch):
     assert (out / "extended.toml").read_text() == small.extended.to_toml()
     html = (out / "report.html").read_text()
     assert "pip install thermerr_rs[report]" in html and "<img" not in html
+
+
+def test_a_column_the_run_cannot_tell_apart_is_reported_beside_the_named_one():
+    """A second sensor beside the unmodelled source's column (its reading plus 0.02 K of noise):
+    the run cannot tell the two places apart, so the cause names one column and lists the other
+    as explaining the held-out error as well — in report.json, the evidence and the verdict
+    line. Without the twin the same case lists no alternative."""
+    c = syn.make_case("vmc", "unmodeled_source", 1)
+    machine = Machine.from_toml(c.nominal_toml())
+    plain = diagnose(tr.Run.from_frame(c.train, source="train"), machine, tr.Run.from_frame(c.test, source="test"))
+    assert plain.verdict == "unmodeled_source" and plain.column == c.column, plain.evidence
+    assert plain.causes[0]["alternatives"] == []
+    assert "does not single out" not in plain.evidence
+
+    rng = np.random.default_rng(7)
+    train, test = dict(c.train), dict(c.test)
+    for frame in (train, test):
+        col = np.asarray(frame[c.column])
+        frame["T_twin"] = col + rng.normal(0.0, 0.02, col.size)
+    d = diagnose(tr.Run.from_frame(train, source="train"), machine, tr.Run.from_frame(test, source="test"))
+    assert d.verdict == "unmodeled_source", d.evidence
+    first = d.causes[0]
+    named = {first["column"]} | {a["column"] for a in first["alternatives"]}
+    assert {c.column, "T_twin"} <= named, d.evidence
+    for a in first["alternatives"]:
+        assert a["rmse_um"] <= first["rmse_um"] * 1.05
+    assert "does not single out" in d.evidence
+    assert "or as well" in str(d).splitlines()[0]

@@ -28,6 +28,17 @@ MARGIN_IN = {"left": 0.85, "right": 0.2, "bottom": 0.55, "top": 0.4}
 NO_PLOTS = "<p>The plots need matplotlib: <code>pip install thermerr_rs[report]</code>.</p>"
 
 
+def cause_label(cause: dict[str, Any], word: str = "") -> str:
+    """``cause (column)`` of a named cause, with the other columns that explain the held-out
+    error as well (``alternatives``): ``unmodeled_source (T_t7, or as well T_t11)``; ``word``
+    goes before the column (``"column "``)."""
+    col = cause.get("column")
+    if not col:
+        return str(cause["cause"])
+    alts = [a["column"] for a in cause.get("alternatives") or []]
+    return f"{cause['cause']} ({word}{col}" + (f", or as well {', '.join(alts)}" if alts else "") + ")"
+
+
 def _png(fig: Figure) -> str:
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=110)
@@ -238,6 +249,9 @@ def render_html(report: dict[str, Any], series: dict[str, Any], network: dict[st
     esc = html.escape
     verdict = report["verdict"]
     col = f" — column <code>{esc(str(report['column']))}</code>" if report.get("column") else ""
+    first = (report.get("causes") or [{}])[0]
+    if report.get("column") and first.get("alternatives"):
+        col += " (or as well " + ", ".join(f"<code>{esc(str(a['column']))}</code>" for a in first["alternatives"]) + ")"
     rows = "".join(
         f"<tr><td>{esc(c['cause'])}</td><td>{esc(str(c.get('column') or ''))}</td>"
         f"<td>{c['gain_pct']:.1f}</td><td>{c['score']:.3f}</td><td>{c.get('delta_bic', float('nan')):.1f}</td>"
@@ -337,9 +351,7 @@ def render_axes_html(summary: dict[str, Any]) -> str:
     esc = html.escape
     rows = []
     for a in summary["axes"]:
-        causes = ", ".join(
-            c["cause"] + (f" ({c['column']})" if c.get("column") else "") for c in summary["causes"] if c["axis"] == a
-        ) or "—"
+        causes = ", ".join(cause_label(c) for c in summary["causes"] if c["axis"] == a) or "—"
         rows.append(
             f"<tr><td><a href='{esc(a)}.report.html'>{esc(a)}</a></td><td>{esc(summary['verdicts'][a])}</td>"
             f"<td>{esc(causes)}</td><td>{esc(summary.get('baseline_network', {}).get(a, 'recalibrated'))}</td>"

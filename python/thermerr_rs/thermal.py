@@ -218,14 +218,16 @@ class Diagnosis:
         return bn["network"] != "recalibrated" or bool(bn.get("second_start", {}).get("unique", True))
 
     def _text(self) -> str:
+        from .report import cause_label
+
         b, e = self.report["baseline"], self.report["extended"]
-        col = f" (column {self.column})" if self.column else ""
+        head = cause_label(self.causes[0], "column ") if self.column and self.causes else self.verdict
         more = ""
         if len(self.causes) > 1:
-            more += "causes: " + ", ".join(c["cause"] + (f" ({c['column']})" if c["column"] else "") for c in self.causes) + "\n"
+            more += "causes: " + ", ".join(cause_label(c) for c in self.causes) + "\n"
         if self.causes and self.remainder_um > 0:
             more += f"unexplained remainder: {self.remainder_um:.3f} µm RMS above the probe noise\n"
-        return (f"verdict: {self.verdict}{col}\n{self.evidence}\n{more}"
+        return (f"verdict: {head}\n{self.evidence}\n{more}"
                 f"held-out RMS: baseline {b['rmse_um']:.3f} µm, extended {e['rmse_um']:.3f} µm, gain {self.gain_pct:.1f} %")
 
 

@@ -257,6 +257,35 @@ pub fn rounds(
     out
 }
 
+/// The sentences on the named causes whose column the run cannot single out: each with the
+/// other columns whose candidate passed the same round's rule and held the axis out as well
+/// ([`super::rounds::ALTERNATIVE_RMSE_SHARE`]). Empty when there are none.
+pub fn alternatives(causes: &[Accepted], axis: &str) -> String {
+    let mut out = String::new();
+    for c in causes.iter().filter(|c| !c.alternatives.is_empty()) {
+        let Some(col) = c.column.as_deref() else {
+            continue;
+        };
+        let others: Vec<String> = c
+            .alternatives
+            .iter()
+            .map(|a| format!("`{}` ({:.2} µm)", a.column, a.rmse_um))
+            .collect();
+        out.push_str(&format!(
+            " The run does not single out `{col}`: {} on {} passes the same rule and holds {axis} out as well (within {:.0} % of {:.2} µm with `{col}`) or better, so the {} may be at either place; a sensor or a test that separates them decides.",
+            c.cause,
+            others.join(", "),
+            100.0 * super::rounds::ALTERNATIVE_RMSE_SHARE,
+            c.rmse_um,
+            match c.cause {
+                super::Cause::SensorDrift => "drifting reading",
+                _ => "effect",
+            }
+        ));
+    }
+    out
+}
+
 /// The sentence when no cause is named (`verdict` is `none` or `unexplained`).
 pub fn unnamed(
     verdict: Verdict,
@@ -329,9 +358,24 @@ mod tests {
             params: Default::default(),
             round,
             rmse_um: 1.0,
+            alternatives: Vec::new(),
             spec: None,
         };
         let (base, last) = (baseline(), holdout(1.5));
+        assert_eq!(alternatives(&[accepted(1, "T_t5")], "E_z"), "");
+        let mut tied = accepted(1, "T_t7");
+        tied.alternatives = vec![super::super::rounds::Alternative {
+            column: "T_t11".into(),
+            node: Some("t2".into()),
+            rmse_um: 0.98,
+            score: 0.3,
+        }];
+        let s = alternatives(&[tied], "E_z");
+        assert!(
+            s.contains("does not single out `T_t7`: unmodeled_source on `T_t11` (0.98 µm)")
+                && s.contains("within 5 % of 1.00 µm with `T_t7`) or better"),
+            "{s}"
+        );
         let alone = named_later(&accepted(3, "T_t5"), &base, &last, "E_z", 1);
         assert!(
             alone.contains("on its own (the only cause named)"),

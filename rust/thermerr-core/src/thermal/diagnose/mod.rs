@@ -825,6 +825,7 @@ fn diagnose_on(
         !outcome.causes.is_empty(),
         opts.min_score,
     ));
+    evidence.push_str(&evidence::alternatives(&outcome.causes, &axis));
     evidence.push_str(&evidence::unsettled(&cands));
     evidence.push_str(&evidence::network(&baseline_network, &axis));
     evidence.push_str(&evidence::second_start(

@@ -30,6 +30,57 @@ pub const MAX_ROUNDS: usize = 4;
 /// whenever the second effect was large.
 pub const MIN_SHARE_OF_EXCESS: f64 = 0.25;
 
+/// How close another column's candidate of the same cause must come to the accepted one to be
+/// reported as an equal explanation: its held-out RMS error of the axis at most this much
+/// above the accepted candidate's (relative). On the real 46-h run, sources from `T_t7` and
+/// `T_t11` held `E_ch1` out at 2.95 and 2.94 µm, and which one won moved with the fit's
+/// resolution (every 45 s, 60 s, 90 s or 120 s of the run): the run cannot tell them apart.
+pub const ALTERNATIVE_RMSE_SHARE: f64 = 0.05;
+
+/// Another column that explains the held-out error as well as an accepted cause's
+/// (`report.json` "causes"[i]."alternatives").
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Alternative {
+    pub column: String,
+    pub node: Option<String>,
+    /// Held-out RMS of the error axis with this candidate instead (µm).
+    pub rmse_um: f64,
+    pub score: f64,
+}
+
+/// The candidates of `cands` that are `chosen`'s cause on another column, pass the same rule
+/// (`ok`) and hold the axis out within [`ALTERNATIVE_RMSE_SHARE`] of it: the best one per
+/// column, best first.
+pub fn alternatives(
+    cands: &[Candidate],
+    chosen: &Candidate,
+    ok: impl Fn(&Candidate) -> bool,
+) -> Vec<Alternative> {
+    let Some(col) = chosen.column.as_deref() else {
+        return Vec::new();
+    };
+    let limit = chosen.holdout.rmse_um * (1.0 + ALTERNATIVE_RMSE_SHARE);
+    let mut out: Vec<Alternative> = Vec::new();
+    let mut near: Vec<&Candidate> = cands
+        .iter()
+        .filter(|c| c.cause == chosen.cause && c.column.as_deref().is_some_and(|c| c != col))
+        .filter(|c| c.holdout.rmse_um <= limit && ok(c))
+        .collect();
+    near.sort_by(|a, b| a.holdout.rmse_um.total_cmp(&b.holdout.rmse_um));
+    for c in near {
+        let column = c.column.clone().unwrap_or_default();
+        if out.iter().all(|a| a.column != column) {
+            out.push(Alternative {
+                column,
+                node: c.node.clone(),
+                rmse_um: c.holdout.rmse_um,
+                score: c.score,
+            });
+        }
+    }
+    out
+}
+
 /// One accepted cause, in the order accepted (`report.json` "causes").
 #[derive(Clone, Debug, Serialize)]
 pub struct Accepted {
@@ -44,6 +95,9 @@ pub struct Accepted {
     pub round: usize,
     /// Held-out RMS of the error axis after the round that accepted it (µm).
     pub rmse_um: f64,
+    /// Other columns whose candidate of the same cause passed that round's rule and held the
+    /// axis out as well (within [`ALTERNATIVE_RMSE_SHARE`]): the run does not tell them apart.
+    pub alternatives: Vec<Alternative>,
     #[serde(skip)]
     pub spec: Option<Spec>,
 }
@@ -183,8 +237,13 @@ where
             joint: None,
         });
     };
-    // (round, candidate); the last one's calibration is the current model
-    let mut accepted: Vec<(usize, Candidate)> = vec![(1, cands1[i].clone())];
+    // (round, candidate, its alternatives); the last one's calibration is the current model
+    let first_rule = |c: &Candidate| supported(c) && c.score >= opts.min_score;
+    let mut accepted: Vec<(usize, Candidate, Vec<Alternative>)> = vec![(
+        1,
+        cands1[i].clone(),
+        alternatives(cands1, &cands1[i], first_rule),
+    )];
     for r in 2..=MAX_ROUNDS {
         let cur = &accepted[accepted.len() - 1].1;
         if cur.holdout.rmse_um / noise <= opts.noise_ratio {
@@ -198,7 +257,7 @@ where
         let carried = candidates::carry(&spec.extra, &spec.machine, &cur.calibration.machine);
         let taken: Vec<&Spec> = accepted
             .iter()
-            .filter_map(|(_, c)| c.spec.as_ref())
+            .filter_map(|(_, c, _)| c.spec.as_ref())
             .collect();
         let b = Baseline::new(
             &cur.calibration,
@@ -211,7 +270,10 @@ where
         let ok = best.is_some_and(|j| passes(&cands[j], &cur.holdout, noise, opts));
         rounds.push(round_entry(r, &cands, best, &cur.holdout, ok, noise));
         match best {
-            Some(j) if ok => accepted.push((r, cands[j].clone())),
+            Some(j) if ok => {
+                let alt = alternatives(&cands, &cands[j], |c| passes(c, &cur.holdout, noise, opts));
+                accepted.push((r, cands[j].clone(), alt));
+            }
             _ => break,
         }
     }
@@ -228,7 +290,7 @@ where
                     .iter()
                     .enumerate()
                     .filter(|&(k, _)| k != j)
-                    .filter_map(|(_, (_, c))| c.spec.as_ref())
+                    .filter_map(|(_, (_, c, _))| c.spec.as_ref())
                     .collect();
                 let spec = candidates::rebuild(cx.nominal, &chain, axis_index, cx.train)
                     .ok_or_else(|| {
@@ -268,7 +330,7 @@ where
             dropped.push(accepted.remove(0));
         }
     }
-    let to_entry = |(round, c): (usize, Candidate)| {
+    let to_entry = |(round, c, alternatives): (usize, Candidate, Vec<Alternative>)| {
         let params = match &c.spec {
             Some(s) => candidates::parameters(s, &joint.calibration.machine, axis_index),
             None => c.parameters.clone(),
@@ -282,10 +344,11 @@ where
             params,
             round,
             rmse_um: c.holdout.rmse_um,
+            alternatives,
             spec: c.spec,
         }
     };
-    let kept: Vec<usize> = accepted.iter().map(|(r, _)| *r).collect();
+    let kept: Vec<usize> = accepted.iter().map(|(r, _, _)| *r).collect();
     for r in rounds.iter_mut() {
         r.kept = r.accepted && kept.contains(&r.round);
     }
@@ -333,6 +396,36 @@ mod tests {
         assert!(!passes(&weak, &before, noise, &opts));
         // nothing above the noise: nothing to remove
         assert_eq!(excess_share(&before, &enough.holdout, 3.0), 0.0);
+    }
+
+    #[test]
+    fn alternatives_are_other_columns_of_the_cause_that_hold_out_as_well_and_pass() {
+        let at = |cause: Cause, col: &str, rmse: f64, dbic: f64| {
+            let mut c = candidate(cause, 0.3, rmse, dbic);
+            c.column = Some(col.into());
+            c
+        };
+        let chosen = at(Cause::UnmodeledSource, "T_a", 2.0, -50.0);
+        let cands = vec![
+            chosen.clone(),
+            at(Cause::UnmodeledSource, "T_b", 2.09, -50.0), // within 5 %
+            at(Cause::UnmodeledSource, "T_b", 2.05, -40.0), // the same column, better: kept once
+            at(Cause::UnmodeledSource, "T_c", 1.9, -50.0),  // better held out
+            at(Cause::UnmodeledSource, "T_d", 2.11, -50.0), // 5.5 % worse
+            at(Cause::UnmodeledSource, "T_e", 2.0, -5.0),   // fails the rule (ΔBIC)
+            at(Cause::UnmodeledSource, "T_a", 1.95, -50.0), // the chosen column on another node
+            at(Cause::SensorDrift, "T_f", 2.0, -50.0),      // another cause
+        ];
+        let ok = |c: &Candidate| supported(c);
+        let alt = alternatives(&cands, &chosen, ok);
+        let cols: Vec<&str> = alt.iter().map(|a| a.column.as_str()).collect();
+        assert_eq!(cols, ["T_c", "T_b"]);
+        assert_eq!(alt[1].rmse_um, 2.05);
+        // nothing close: none
+        assert!(alternatives(&cands[..1], &chosen, ok).is_empty());
+        // a cause without a column has none
+        let lag = candidate(Cause::ThermalLag, 0.3, 2.0, -50.0);
+        assert!(alternatives(&cands, &lag, ok).is_empty());
     }
 
     #[test]
