@@ -185,7 +185,10 @@ class Diagnosis:
 
     @property
     def causes(self) -> list[dict[str, Any]]:
-        """Every named cause in the order accepted (empty for ``none`` and ``unexplained``)."""
+        """Every named cause in the order accepted (empty for ``none`` and ``unexplained``), each
+        with ``alternatives``: the other columns whose candidate of the same cause passed the same
+        round's rule and held the axis out within 5 % of it or better (the run does not tell
+        them apart)."""
         return list(self.report["causes"])
 
     @property
