@@ -263,7 +263,9 @@ def _diagnose_task(path: str, machine_toml: str, machine_file: str, axis: str | 
         target = Path(out_dir) / Path(path).stem
         d.write(target)
         b, e = d.report["baseline"], d.report["extended"]
-        return str(target), _finite({"verdict": d.verdict, "column": d.column, "gain_pct": d.gain_pct,
+        alts = [a["column"] for a in d.causes[0]["alternatives"]] if d.column and d.causes else []
+        return str(target), _finite({"verdict": d.verdict, "column": d.column, "alternatives": ",".join(alts),
+                                     "gain_pct": d.gain_pct,
                                      "baseline_rms": float(b["rmse_um"]), "extended_rms": float(e["rmse_um"]),
                                      "baseline_unique": d.baseline_unique})
 
@@ -361,7 +363,8 @@ def table(results: Sequence[RunResult]) -> str:
         if not r.ok:
             return ""
         if "verdict" in f:
-            col = f" ({f['column']})" if f.get("column") else ""
+            alts = f", or as well {f['alternatives'].replace(',', ', ')}" if f.get("alternatives") else ""
+            col = f" ({f['column']}{alts})" if f.get("column") else ""
             return (f"{f['verdict']}{col}: RMS {f['baseline_rms']:.3f} -> {f['extended_rms']:.3f} µm, "
                     f"gain {f['gain_pct']:.1f} %")
         rate = f.get("compensation_rate")
@@ -466,7 +469,9 @@ def diagnose_runs(
     """Diagnose every run against one nominal machine (a :class:`~thermerr_rs.Machine` or its
     TOML file) and write each report into ``out_dir/<stem>/`` (``report.json``, ``report.html``,
     ``calibrated.toml``, ``extended.toml``). Each run is calibrated on its first 70 % and scored
-    on the rest (``holdout_fraction``). ``figures``: ``verdict``, ``column``, ``gain_pct``,
+    on the rest (``holdout_fraction``). ``figures``: ``verdict``, ``column`` (with
+    ``alternatives``: the other columns that explain the held-out error as well, comma-separated,
+    as ``sensors`` of a fit; see :attr:`~thermerr_rs.thermal.Diagnosis.causes`), ``gain_pct``,
     ``baseline_rms`` and ``extended_rms`` (held-out, µm), and ``baseline_unique`` (False where a
     recalibrated baseline has a second solution: :attr:`~thermerr_rs.thermal.Diagnosis.baseline_unique`).
     ``network``: the baseline's network
