@@ -189,3 +189,18 @@ def test_a_column_the_run_cannot_tell_apart_is_reported_beside_the_named_one():
         assert a["rmse_um"] <= first["rmse_um"] * 1.05
     assert "does not single out" in d.evidence
     assert "or as well" in str(d).splitlines()[0]
+
+
+def test_the_cli_warms_the_report_in_a_thread_and_needs_no_matplotlib(monkeypatch):
+    """`thermerr diagnose` imports matplotlib and draws one small figure in a thread while the
+    core diagnoses: it touches no pyplot state, and without matplotlib it does nothing."""
+    import matplotlib.pyplot as plt
+
+    from thermerr_rs import cli
+
+    before = plt.get_fignums()
+    cli._warm_report()
+    assert plt.get_fignums() == before
+    for name in ("matplotlib", "matplotlib.figure"):
+        monkeypatch.setitem(sys.modules, name, None)
+    assert cli._warm_report() is None
