@@ -221,12 +221,11 @@ def network_svg(network: dict[str, Any], causes: list[dict[str, Any]]) -> str:
     return "".join(out)
 
 
-def _gain_bar(gain: float, cands: list[dict[str, Any]], named: bool) -> str:
+def _gain_bar(gain: float, top: float, named: bool) -> str:
     """A candidate's held-out gain as a bar in its table row (green: the named one; red: a gain
     below zero), scaled to the largest |gain| of the round. In the table, not a figure: a chart
     of 30-odd labelled bars was the costliest image of the report (0.37 of 0.77 s per axis on
-    the real run) and said what the table says."""
-    top = max((abs(c["gain_pct"]) for c in cands), default=0.0) or 1.0
+    the real run) and said what the table says. ``top``: the largest |gain| of the round (> 0)."""
     color = "#2a7" if named else ("#bbb" if gain >= 0 else "#d66")
     return (f"<span style='display:inline-block;width:{120 * min(abs(gain), top) / top:.0f}px;height:.8em;"
             f"background:{color}'></span> {gain:.1f}")
@@ -242,9 +241,10 @@ def render_html(report: dict[str, Any], series: dict[str, Any], network: dict[st
         col += " (or as well " + ", ".join(f"<code>{esc(str(a['column']))}</code>" for a in first["alternatives"]) + ")"
     cands = report.get("candidates", [])
     named = cands[0] if cands and verdict not in ("none", "unexplained") else None
+    top = max((abs(c["gain_pct"]) for c in cands), default=0.0) or 1.0
     rows = "".join(
-        f"<tr><td>{esc(c['cause'])}</td><td>{esc(str(c.get('column') or ''))}</td>"
-        f"<td>{_gain_bar(c['gain_pct'], cands, c is named)}</td><td>{c['score']:.3f}</td>"
+        f"<tr><td>{esc(c['cause'])}</td><td>{esc(str(c.get('column') or ''))}</td><td>{esc(str(c.get('node') or ''))}</td>"
+        f"<td>{_gain_bar(c['gain_pct'], top, c is named)}</td><td>{c['score']:.3f}</td>"
         f"<td>{c.get('delta_bic', float('nan')):.1f}</td>"
         f"<td>{esc(json.dumps(c.get('parameters', {})))}</td></tr>"
         for c in cands
@@ -297,7 +297,7 @@ figure{{margin:1.5em 0}} img{{max-width:100%}} figcaption{{color:#555;font-size:
 {drawing}
 {figs}
 <h2>Candidates (round 1), scored on the held-out data</h2>
-<table><tr><th>cause</th><th>column</th><th>held-out gain (%): 1 − RMS(extended)/RMS(baseline)</th><th>score</th><th>ΔBIC (train)</th><th>parameters</th></tr>{rows}</table>
+<table><tr><th>cause</th><th>column</th><th>node</th><th>held-out gain (%): 1 − RMS(extended)/RMS(baseline)</th><th>score</th><th>ΔBIC (train)</th><th>parameters</th></tr>{rows}</table>
 <p style="color:#777;font-size:.85em">calibrated.toml: the nominal model after calibration; extended.toml: calibrated plus the extension of every named cause.
 Both load back with <code>thermerr_rs.Machine.load</code> and simulate with the same code.</p>
 </body></html>
