@@ -363,7 +363,9 @@ def table(results: Sequence[RunResult]) -> str:
         if not r.ok:
             return ""
         if "verdict" in f:
-            alts = f", or as well {f['alternatives'].replace(',', ', ')}" if f.get("alternatives") else ""
+            from .report import also
+
+            alts = also(f["alternatives"].split(",") if f.get("alternatives") else [])
             col = f" ({f['column']}{alts})" if f.get("column") else ""
             return (f"{f['verdict']}{col}: RMS {f['baseline_rms']:.3f} -> {f['extended_rms']:.3f} µm, "
                     f"gain {f['gain_pct']:.1f} %")

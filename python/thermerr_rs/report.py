@@ -28,6 +28,12 @@ MARGIN_IN = {"left": 0.85, "right": 0.2, "bottom": 0.55, "top": 0.4}
 NO_PLOTS = "<p>The plots need matplotlib: <code>pip install thermerr_rs[report]</code>.</p>"
 
 
+def also(columns: list[str]) -> str:
+    """``, or as well T_b, T_c``: the other columns that explain the held-out error as well as a
+    named one (empty when there are none)."""
+    return f", or as well {', '.join(columns)}" if columns else ""
+
+
 def cause_label(cause: dict[str, Any], word: str = "") -> str:
     """``cause (column)`` of a named cause, with the other columns that explain the held-out
     error as well (``alternatives``): ``unmodeled_source (T_t7, or as well T_t11)``; ``word``
@@ -35,8 +41,7 @@ def cause_label(cause: dict[str, Any], word: str = "") -> str:
     col = cause.get("column")
     if not col:
         return str(cause["cause"])
-    alts = [a["column"] for a in cause.get("alternatives") or []]
-    return f"{cause['cause']} ({word}{col}" + (f", or as well {', '.join(alts)}" if alts else "") + ")"
+    return f"{cause['cause']} ({word}{col}{also([a['column'] for a in cause.get('alternatives') or []])})"
 
 
 def _png(fig: Figure) -> str:
@@ -227,7 +232,7 @@ def _gain_bar(gain: float, top: float, named: bool) -> str:
     of 30-odd labelled bars was the costliest image of the report (0.37 of 0.77 s per axis on
     the real run) and said what the table says. ``top``: the largest |gain| of the round (> 0)."""
     color = "#2a7" if named else ("#bbb" if gain >= 0 else "#d66")
-    return (f"<span style='display:inline-block;width:{120 * min(abs(gain), top) / top:.0f}px;height:.8em;"
+    return (f"<span style='display:inline-block;width:{120 * abs(gain) / top:.0f}px;height:.8em;"
             f"background:{color}'></span> {gain:.1f}")
 
 
