@@ -204,3 +204,44 @@ def test_the_cli_warms_the_report_in_a_thread_and_needs_no_matplotlib(monkeypatc
     for name in ("matplotlib", "matplotlib.figure"):
         monkeypatch.setitem(sys.modules, name, None)
     assert cli._warm_report() is None
+
+
+def test_suspect_readings_are_said_not_changed(tmp_path, capsys):
+    """A sensor that fails in the run (a thermocouple open for one reading, then frozen for
+    an hour) is pointed out with its rows, by the command line, in report.json and as a
+    SuspectReadingWarning in Python; the clean run gets none. The readings are used as read."""
+    from thermerr_rs.errors import SuspectReadingWarning
+
+    c = syn.make_case("vmc", "speed_growth", 5)
+    clean = dict(c.train)
+    bad = {k: np.array(v, dtype=float).copy() for k, v in clean.items()}
+    col = bad["T_column"]
+    col[100] += 60.0  # open for one reading: rows 101 (in) and 102 (out), 1-based
+    col[200:240] = col[200]  # frozen from row 201 for 39 steps
+    step = float(np.median(np.diff(bad["time_s"])))
+    frozen_s = 39 * step
+    assert frozen_s >= 1800.0, "the frozen stretch must reach the stuck floor"
+    run, nominal = tmp_path / "bad.csv", tmp_path / "nominal.toml"
+    syn.write_run_csv(run, bad)
+    nominal.write_text(c.nominal_toml())
+    out = tmp_path / "report"
+    assert main(["diagnose", str(run), "--machine", str(nominal), "--out", str(out)]) == 0
+    printed = capsys.readouterr()
+    lines = [ln for ln in printed.out.splitlines() if ln.startswith("warning: ")]
+    assert len(lines) == 2, printed.out
+    assert "T_column jumps by up to 60.0" in lines[0] and "first at row 101" in lines[0]
+    assert "T_column repeats one reading" in lines[1] and f"for {frozen_s:.0f} s from row 201" in lines[1]
+    assert "SuspectReadingWarning" not in printed.err  # the CLI says it once, as a line
+    rep = json.loads((out / "report.json").read_text())
+    assert (out / "report.html").read_text().count("T_column jumps by up to 60.0") == 1
+    assert [(s["column"], s["kind"], s["row"], s["count"]) for s in rep["suspect_readings"]] == [
+        ("T_column", "jump", 101, 2), ("T_column", "repeat", 201, 1)]
+    with pytest.warns(SuspectReadingWarning, match="T_column jumps"):
+        d = diagnose(tr.read_run(run), Machine.from_toml(c.nominal_toml()), progress=False)
+    assert len(d.report["suspect_readings"]) == 2 and str(d).count("\nwarning: ") == 2
+    with pytest.warns(SuspectReadingWarning, match="T_column repeats"):
+        _, s = Machine.identify(tr.read_run(run))
+    assert sum(n.startswith("suspect reading: ") for n in s["notes"]) == 2
+    # the clean run: nothing suspect
+    d = diagnose(tr.Run.from_frame(clean, source="clean"), Machine.from_toml(c.nominal_toml()), progress=False)
+    assert d.report["suspect_readings"] == [] and "warning:" not in str(d)

@@ -30,7 +30,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from . import __version__
-from .errors import ConvergenceError, NumericalError, ThermerrError
+from .errors import ConvergenceError, NumericalError, SuspectReadingWarning, ThermerrError
 from .metrics import Scores, scores
 from .run import Run, read_run
 
@@ -821,6 +821,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.json:
         args.quiet = True
+    # the result's own lines say them (warning: ..., note: suspect reading: ...)
+    warnings.filterwarnings("ignore", category=SuspectReadingWarning)
     try:
         rc: int = args.func(args)
         sys.stdout.flush()

@@ -83,6 +83,13 @@ class MissingDependencyError(ThermerrError, ImportError):
     """An optional dependency is not installed; the message names the extra to install."""
 
 
+class SuspectReadingWarning(UserWarning):
+    """A reading of a run that the run itself makes suspect (a jump far beyond the column's usual
+    change, one reading repeated for 30 min or more): a sensor fault, said and not changed. The
+    diagnosis lists them in ``report["suspect_readings"]``, identification in its notes; the
+    command line prints them as lines of the result instead."""
+
+
 __all__ = [
     "ThermerrError",
     "ParameterError",
@@ -95,4 +102,5 @@ __all__ = [
     "NotFittedError",
     "ModelFormatError",
     "MissingDependencyError",
+    "SuspectReadingWarning",
 ]

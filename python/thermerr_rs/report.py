@@ -282,6 +282,7 @@ def render_html(report: dict[str, Any], series: dict[str, Any], network: dict[st
         f"<code>{esc(str(ident_info['source']))}</code> ({ident_info['train_rows']} training rows, "
         f"{ident_info['holdout_rows']} held out; ambient rule: {esc(str(ident_info['ambient_rule']))}; "
         f"nodes: {esc(str(ident_info['node_rule']))}), {esc(IDENTIFIED_CAVEAT)}</p>")
+    suspects = suspects_html(report.get("suspect_readings", []))
     return f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>thermerr diagnosis: {esc(verdict)}</title>
 <style>body{{font-family:system-ui,sans-serif;max-width:980px;margin:2em auto;padding:0 1em;color:#222}}
@@ -291,6 +292,7 @@ figure{{margin:1.5em 0}} img{{max-width:100%}} figcaption{{color:#555;font-size:
 <p>thermerr diagnosis of <code>{esc(report.get('run', ''))}</code> against <code>{esc(report.get('machine', ''))}</code>, axis <b>{esc(report['axis'])}</b></p>
 <p class="verdict">Verdict: <b>{esc(verdict)}</b>{col}</p>
 <p class="evidence">{esc(report.get('evidence', ''))}</p>
+{suspects}
 <table><tr><th></th><th>RMS (µm)</th><th>max |r| (µm)</th><th>band (µm)</th></tr>
 <tr><td>calibrated model (baseline)</td><td>{b['rmse_um']:.3f}</td><td>{b['max_abs_um']:.3f}</td><td>{b['band_um']:.3f}</td></tr>
 <tr><td>extended model (every named cause)</td><td>{e['rmse_um']:.3f}</td><td>{e['max_abs_um']:.3f}</td><td>{e['band_um']:.3f}</td></tr></table>
@@ -342,6 +344,15 @@ IDENTIFIED_CAVEAT = (
     "unique)")
 
 
+def suspects_html(items: list[dict[str, Any]]) -> str:
+    """The suspect readings of the run(s) (a jump, a long exact repeat), one line each; nothing
+    when there are none."""
+    if not items:
+        return ""
+    lines = "".join(f"<li>{html.escape(sp['text'])}</li>" for sp in items)
+    return f"<div style='border-left:4px solid #c80;padding:.2em .8em'><b>Suspect readings</b><ul>{lines}</ul></div>"
+
+
 def render_axes_html(summary: dict[str, Any]) -> str:
     """The summary page of a diagnosis of several axes: a row per axis, linking its own page."""
     esc = html.escape
@@ -362,6 +373,7 @@ def render_axes_html(summary: dict[str, Any]) -> str:
         "every figure on held-out data</p>"
         + (f"<p>The network was <b>identified from data</b> by <code>thermerr init</code>, "
            f"{esc(IDENTIFIED_CAVEAT)}</p>" if summary.get("identified") else "")
+        + suspects_html(summary.get("suspect_readings", []))
         + "<table><tr><th>axis</th><th>verdict</th><th>causes</th><th>baseline network</th>"
         "<th>baseline RMS (µm)</th><th>extended RMS (µm)</th><th>gain (%)</th>"
         "<th>unexplained remainder (µm)</th></tr>" + "".join(rows) + "</table></body></html>\n")

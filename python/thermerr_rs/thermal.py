@@ -6,7 +6,8 @@ from __future__ import annotations
 import json
 import os
 import sys
-from collections.abc import Callable, Iterator
+import warnings
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,6 +18,7 @@ import numpy as np
 from . import _core
 from ._arrays import F64
 from ._io import write_atomic
+from .errors import SuspectReadingWarning
 from .run import Run
 
 #: The baseline network rules ``diagnose(network=...)`` takes (the core's list).
@@ -83,7 +85,9 @@ class Machine:
         ax = [axes] if isinstance(axes, str) else (list(axes) if axes is not None else None)
         inner, summary = _core.MachineModel.identify(*_run_args(run), axes=ax, nodes=nodes, ambient=ambient,
                                                      train_fraction=train_fraction, seed=seed, max_iter=max_iter)
-        return cls(inner), json.loads(summary)
+        s: dict[str, Any] = json.loads(summary)
+        _warn_suspects(n[len(SUSPECT_NOTE):] for n in s["notes"] if n.startswith(SUSPECT_NOTE))
+        return cls(inner), s
 
     def to_toml(self) -> str:
         return self._inner.to_toml()
@@ -208,7 +212,8 @@ class Diagnosis:
                             self.extended.to_dict())
 
     def __str__(self) -> str:
-        return self._text() + (_identified_line() if self.report.get("identified") else "")
+        return (self._text() + _suspect_lines(self.report.get("suspect_readings", []))
+                + (_identified_line() if self.report.get("identified") else ""))
 
     @property
     def baseline_unique(self) -> bool:
@@ -232,6 +237,29 @@ class Diagnosis:
             more += f"unexplained remainder: {self.remainder_um:.3f} µm RMS above the probe noise\n"
         return (f"verdict: {head}\n{self.evidence}\n{more}"
                 f"held-out RMS: baseline {b['rmse_um']:.3f} µm, extended {e['rmse_um']:.3f} µm, gain {self.gain_pct:.1f} %")
+
+
+# how identification's notes mark a suspect reading (rust/thermerr-core/src/thermal/identify.rs)
+SUSPECT_NOTE = "suspect reading: "
+
+
+def _unique_suspects(lists: Iterable[list[dict[str, Any]]]) -> list[dict[str, Any]]:
+    """The suspect readings of several reports, each once (every axis scans the same
+    temperatures), in the order first seen."""
+    seen: dict[str, dict[str, Any]] = {}
+    for items in lists:
+        for sp in items:
+            seen.setdefault(sp["text"], sp)
+    return list(seen.values())
+
+
+def _suspect_lines(items: list[dict[str, Any]]) -> str:
+    return "".join(f"\nwarning: {sp['text']}" for sp in items)
+
+
+def _warn_suspects(texts: Iterable[str]) -> None:
+    for t in texts:
+        warnings.warn(t, SuspectReadingWarning, stacklevel=3)
 
 
 def _identified_line() -> str:
@@ -292,7 +320,9 @@ def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: st
         d = machine._inner.diagnose(*_run_args(run), _run_args(holdout) if holdout is not None else None,
                                     axis=axis, holdout_fraction=holdout_fraction, min_score=min_score,
                                     noise_ratio=noise_ratio, network=network, progress=cb)
-    return _diagnosis(d)
+    out = _diagnosis(d)
+    _warn_suspects(sp["text"] for sp in out.report.get("suspect_readings", []))
+    return out
 
 
 def _diagnosis(d: dict[str, Any]) -> Diagnosis:
@@ -339,6 +369,7 @@ class AxesDiagnosis:
             "extended_rmse_um": {a: d.report["extended"]["rmse_um"] for a, d in self.by_axis.items()},
             "reports": {a: f"{a}.report.json" for a in self.by_axis},
             "identified": any(d.report["identified"] for d in self.by_axis.values()),
+            "suspect_readings": _unique_suspects(d.report.get("suspect_readings", []) for d in self.by_axis.values()),
         }
 
     def write(self, out_dir: str | os.PathLike[str]) -> Path:
@@ -360,7 +391,8 @@ class AxesDiagnosis:
                      "the iteration limit, or from a second start it fits the training rows as well (within 5 %) or "
                      "better and holds out differently (see each axis's evidence); --network best or keep gives a "
                      "baseline with one solution")
-        return text + (_identified_line() if self.report["identified"] else "")
+        return (text + _suspect_lines(self.report["suspect_readings"])
+                + (_identified_line() if self.report["identified"] else ""))
 
 
 def diagnose_axes(run: Run, machine: Machine, holdout: Run | None = None, *, axes: list[str] | None = None,
@@ -379,4 +411,6 @@ def diagnose_axes(run: Run, machine: Machine, holdout: Run | None = None, *, axe
                                           min_score=min_score, noise_ratio=noise_ratio, network=network,
                                           progress=cb)
     out = {d.axis: d for d in map(_diagnosis, ds)}
-    return AxesDiagnosis(out, run.source, machine._inner.file)
+    res = AxesDiagnosis(out, run.source, machine._inner.file)
+    _warn_suspects(sp["text"] for sp in res.report["suspect_readings"])
+    return res

@@ -151,25 +151,16 @@ impl Guard {
         let sensors = (0..d)
             .map(|j| {
                 let col = |i: usize| x[i * d + j];
-                let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-                let (mut rate, mut repeat, mut run_start, mut start_row, mut repeat_row) =
-                    (0.0f64, 0.0f64, time(0), 0usize, 0usize);
+                let (mut lo, mut hi, mut rate) = (f64::INFINITY, f64::NEG_INFINITY, 0.0f64);
                 for i in 0..n {
                     lo = lo.min(col(i));
                     hi = hi.max(col(i));
                     if i > 0 {
                         let dt = time(i) - time(i - 1);
                         rate = rate.max((col(i) - col(i - 1)).abs() / dt);
-                        if col(i) != col(i - 1) {
-                            run_start = time(i);
-                            start_row = i;
-                        }
-                        if time(i) - run_start > repeat {
-                            repeat = time(i) - run_start;
-                            repeat_row = start_row;
-                        }
                     }
                 }
+                let (repeat_row, repeat) = longest_repeat(n, col, time);
                 if 2.0 * repeat > STUCK_FLOOR_S {
                     repeats.push(LongRepeat {
                         feature: j,
@@ -632,6 +623,135 @@ impl GuardedPredictor {
         }
         Ok(())
     }
+}
+
+/// The longest stretch over which a column repeats one reading exactly: its first row
+/// (0-based) and its length (s); `(0, 0.0)` when no reading repeats.
+fn longest_repeat(
+    n: usize,
+    col: impl Fn(usize) -> f64,
+    time: impl Fn(usize) -> f64,
+) -> (usize, f64) {
+    let (mut best, mut best_row) = (0.0f64, 0usize);
+    let mut start = 0usize;
+    for i in 1..n {
+        if col(i) != col(i - 1) {
+            start = i;
+        }
+        if time(i) - time(start) > best {
+            best = time(i) - time(start);
+            best_row = start;
+        }
+    }
+    (best_row, best)
+}
+
+/// A jump between two readings is suspect when its rate is more than this many times the
+/// column's 99th percentile of rates ...
+pub const JUMP_FACTOR: f64 = 20.0;
+/// ... and more than this many units (K, µm) per median step of the run. On the real 46-h run
+/// (15 s, 16 temperatures, 5 probes) the largest step of any column is 2.9 K (a fast sensor
+/// whose 99th percentile is 0.52 K: 5.5 times it), of any probe 0.79 µm.
+pub const JUMP_FLOOR: f64 = 2.0;
+
+/// What makes a reading suspect.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SuspectKind {
+    /// A step far faster than the column ever moves otherwise ([`JUMP_FACTOR`], [`JUMP_FLOOR`]):
+    /// an open thermocouple, a loose cable, a spike.
+    Jump,
+    /// One reading repeated exactly for [`STUCK_FLOOR_S`] or longer: a frozen transmitter, or a
+    /// logger's coarse resolution on a steady temperature.
+    Repeat,
+}
+
+/// Readings of a run that the run itself makes suspect. A run to be diagnosed or identified has
+/// no clean training run to learn a [`Guard`]'s limits from, so each column is judged against
+/// its own steps: the guard's stuck floor, and a jump far beyond the column's usual rate.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Suspect {
+    pub column: String,
+    pub kind: SuspectKind,
+    /// The first suspect row (1-based, as the run's errors count rows).
+    pub row: usize,
+    /// How many jumps (1 for a repeat).
+    pub count: usize,
+    /// The largest jump (the column's units) or the repeat's length (s).
+    pub size: f64,
+    /// One line for a person: the file, the column, the rows and what to do.
+    pub text: String,
+}
+
+/// The suspect readings of `cols` (named `names`, one value per row of `time`, finite), from
+/// the run `source`: per column, its jumps and its longest exact repeat if
+/// [`STUCK_FLOOR_S`] or longer. Nothing is changed: the caller reports them.
+pub fn suspect_readings(
+    source: &str,
+    names: &[&str],
+    cols: &[&[f64]],
+    time: &[f64],
+) -> Vec<Suspect> {
+    let n = time.len();
+    let mut out = Vec::new();
+    if n < 3 {
+        return out;
+    }
+    let step = median_step(time).unwrap_or(1.0).max(f64::MIN_POSITIVE);
+    for (name, col) in names.iter().zip(cols) {
+        if col.len() != n || col.iter().any(|v| !v.is_finite()) {
+            continue;
+        }
+        let mut rates: Vec<f64> = (1..n)
+            .map(|i| (col[i] - col[i - 1]).abs() / (time[i] - time[i - 1]).max(f64::MIN_POSITIVE))
+            .collect();
+        let mut sorted = rates.clone();
+        sorted.sort_by(f64::total_cmp);
+        let q99 = sorted[((sorted.len() - 1) as f64 * 0.99).round() as usize];
+        let limit = (JUMP_FACTOR * q99).max(JUMP_FLOOR / step);
+        let (mut count, mut first, mut largest) = (0usize, 0usize, 0.0f64);
+        for (k, r) in rates.iter_mut().enumerate() {
+            if *r > limit {
+                if count == 0 {
+                    first = k + 1;
+                }
+                count += 1;
+                largest = largest.max((col[k + 1] - col[k]).abs());
+            }
+        }
+        if count > 0 {
+            out.push(Suspect {
+                column: name.to_string(),
+                kind: SuspectKind::Jump,
+                row: first + 1,
+                count,
+                size: largest,
+                text: format!(
+                    "{source}: {name} jumps by up to {largest:.3} {unit} from one reading to the next ({count} time{s}, first at row {}), more than {JUMP_FACTOR} times the column's usual fastest change: a sensor fault (an open or loose sensor, a spike)? The run is used as read; drop the column or the rows if so",
+                    first + 1,
+                    unit = if name.starts_with("E_") { "µm" } else { "K" },
+                    s = if count == 1 { "" } else { "s" },
+                ),
+            });
+        }
+        let (row, seconds) = longest_repeat(n, |i| col[i], |i| time[i]);
+        if seconds >= STUCK_FLOOR_S {
+            out.push(Suspect {
+                column: name.to_string(),
+                kind: SuspectKind::Repeat,
+                row: row + 1,
+                count: 1,
+                size: seconds,
+                text: format!(
+                    "{source}: {name} repeats one reading ({}) for {:.0} s from row {}: a stuck sensor, or a logger's coarse resolution on a steady temperature? The run is used as read",
+                    col[row],
+                    seconds,
+                    row + 1
+                ),
+            });
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -318,3 +318,64 @@ fn long_training_repeats_are_reported_with_their_rows() {
     assert_eq!(g.sensors[1].stuck_s, 4800.0);
     assert_eq!(g, Guard::from_training(&x, 2, Some(&t), 60.0).unwrap());
 }
+
+/// A warming column sampled every 15 s (a slow rise and a small deterministic wobble, never
+/// repeating a value), 4 h long.
+fn warming(n: usize) -> (Vec<f64>, Vec<f64>) {
+    let t: Vec<f64> = (0..n).map(|i| 15.0 * i as f64).collect();
+    let y = t
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            20.0 + 5.0 * (1.0 - (-s / 3600.0).exp()) + 0.02 * ((i * 7919 % 13) as f64 / 13.0)
+        })
+        .collect();
+    (t, y)
+}
+
+#[test]
+fn a_clean_column_is_not_suspect() {
+    let (t, y) = warming(960);
+    assert!(suspect_readings("run.csv", &["T_a"], &[&y], &t).is_empty());
+}
+
+#[test]
+fn a_spike_is_a_jump_at_its_row() {
+    let (t, mut y) = warming(960);
+    y[500] += 60.0; // an open thermocouple for one reading: in at row 501, out at row 502
+    let s = suspect_readings("run.csv", &["T_a"], &[&y], &t);
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!(
+        (s[0].kind, s[0].row, s[0].count),
+        (SuspectKind::Jump, 501, 2)
+    );
+    assert!((s[0].size - 60.0).abs() < 0.1, "{}", s[0].size);
+    assert!(
+        s[0].text.starts_with("run.csv: T_a jumps by up to 60.0"),
+        "{}",
+        s[0].text
+    );
+}
+
+#[test]
+fn a_frozen_reading_is_a_repeat_and_a_long_gap_is_not_a_jump() {
+    let (mut t, mut y) = warming(960);
+    for v in y.iter_mut().skip(300).take(200) {
+        *v = 23.5; // frozen for 199 steps of 15 s (2985 s)
+    }
+    // the logger off for a day, the machine cold again: a large change over a long gap
+    for (i, (ti, yi)) in t.iter_mut().zip(y.iter_mut()).enumerate().skip(800) {
+        *ti += 86_400.0;
+        *yi -= 4.0 + 0.001 * i as f64;
+    }
+    let s = suspect_readings("run.csv", &["T_a"], &[&y], &t);
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!((s[0].kind, s[0].row), (SuspectKind::Repeat, 301));
+    assert_eq!(s[0].size, 199.0 * 15.0);
+    // shorter than the stuck floor: not said
+    let (t, mut y) = warming(960);
+    for v in y.iter_mut().skip(300).take(100) {
+        *v = 23.5;
+    }
+    assert!(suspect_readings("run.csv", &["T_a"], &[&y], &t).is_empty());
+}

@@ -860,6 +860,19 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let m = ((n as f64 * frac).floor() as usize).clamp(10, n);
     let t = &run.time_s[..m];
     let mut notes = Vec::new();
+    // readings the run itself makes suspect: said, not changed
+    {
+        let names: Vec<&str> = ck
+            .temps
+            .iter()
+            .copied()
+            .chain(ck.axes.iter().map(String::as_str))
+            .collect();
+        let cols: Vec<&[f64]> = names.iter().map(|c| view.col(c)).collect::<Result<_>>()?;
+        for sp in crate::guard::suspect_readings(&file, &names, &cols, &run.time_s) {
+            notes.push(format!("suspect reading: {}", sp.text));
+        }
+    }
 
     // 1. ambient
     let ambient = choose_ambient(run, &ck.temps, m, opts.ambient.as_deref())?;
@@ -1239,7 +1252,8 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         // balance's misfit, when it leaves at most OUTSIDE_SHARE of it
         let s0 = misfit(&cols, &x, &y);
         let mut heat_from: Option<(&str, f64, Vec<f64>)> = None;
-        for c in &outside {
+        // (a balance fitted exactly has nothing left to explain)
+        for c in outside.iter().filter(|_| s0 > 0.0) {
             let d: Vec<f64> = view.col(c)?[..m]
                 .iter()
                 .zip(meas[i])
@@ -1250,7 +1264,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             let mut with = cols.clone();
             with.push(col);
             let xo = nnls(&with, &y);
-            let share = misfit(&with, &xo, &y) / s0.max(f64::MIN_POSITIVE);
+            let share = misfit(&with, &xo, &y) / s0;
             if share <= OUTSIDE_SHARE && heat_from.as_ref().is_none_or(|h| share < h.1) {
                 heat_from = Some((c, share, xo));
             }

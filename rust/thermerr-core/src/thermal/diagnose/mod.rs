@@ -49,6 +49,7 @@ use super::calibrate::{
 use super::machine::{Identified, Machine};
 use super::sim::RunView;
 use crate::error::{Error, Result};
+use crate::guard::{suspect_readings, Suspect};
 use crate::progress::{self, Progress};
 use candidates::{Baseline, Spec};
 use score::HeldOut;
@@ -479,6 +480,9 @@ pub struct Diagnosis {
     pub remainder_um: f64,
     /// Unused `T_*` columns not tried as a source (beyond [`MAX_SOURCE_COLUMNS`] or the cap).
     pub untried_columns: Vec<String>,
+    /// Readings of the run(s) the runs themselves make suspect (a jump, a long exact repeat) in
+    /// the `T_*` columns and the axis: reported, not changed ([`crate::guard::suspect_readings`]).
+    pub suspect_readings: Vec<Suspect>,
     /// The training run's source.
     pub run: String,
     /// The held-out description and its time axis and measured error.
@@ -504,6 +508,7 @@ pub struct Report<'a> {
     pub machine: &'a str,
     pub candidates: &'a [Candidate],
     pub untried_columns: &'a [String],
+    pub suspect_readings: &'a [Suspect],
     pub causes: &'a [Accepted],
     pub remainder_um: f64,
     pub rounds: &'a [Round],
@@ -551,6 +556,7 @@ impl Diagnosis {
             machine,
             candidates: &self.candidates,
             untried_columns: &self.untried_columns,
+            suspect_readings: &self.suspect_readings,
             causes: &self.causes,
             remainder_um: self.remainder_um,
             rounds: &self.rounds,
@@ -851,6 +857,7 @@ fn diagnose_on(
             train.col(&axis)?[split..].to_vec(),
         ),
     };
+    let suspect_readings = suspects(train, hold, &axis);
     Ok(Diagnosis {
         column,
         axis,
@@ -863,6 +870,7 @@ fn diagnose_on(
         candidates: cands,
         chosen,
         untried_columns,
+        suspect_readings,
         causes: outcome.causes,
         dropped: outcome.dropped,
         rounds: outcome.rounds,
@@ -874,6 +882,23 @@ fn diagnose_on(
         holdout_time,
         holdout_measured,
     })
+}
+
+/// The suspect readings of the training run and the separate held-out run (if any): their
+/// `T_*` columns and `axis`.
+fn suspects(train: &RunView<'_>, hold: Option<&RunView<'_>>, axis: &str) -> Vec<Suspect> {
+    let mut out = Vec::new();
+    for v in std::iter::once(train).chain(hold) {
+        let mut names = v.cols_with_prefix("T_");
+        names.sort();
+        names.push(axis.to_string());
+        let (names, cols): (Vec<&str>, Vec<&[f64]>) = names
+            .iter()
+            .filter_map(|c| v.col(c).ok().map(|col| (c.as_str(), col)))
+            .unzip();
+        out.extend(suspect_readings(&v.source, &names, &cols, v.time));
+    }
+    out
 }
 
 /// The diagnosis of each of `axes` (every drift entry of the machine when empty), in parallel,
