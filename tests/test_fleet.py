@@ -230,9 +230,18 @@ def test_diagnose_passes_the_network_rule_to_every_run(tmp_path):
     ref = tr.diagnose(tr.read_run(d / "vmc_a.csv"), tr.Machine.load(machine), network="best", progress=False)
     assert rows[0].ok and rows[0].figures["baseline_rms"] == ref.report["baseline"]["rmse_um"]
     alts = ",".join(a["column"] for a in ref.causes[0]["alternatives"]) if ref.column and ref.causes else ""
-    assert rows[0].figures["alternatives"] == alts
+    assert rows[0].figures["alternatives"] == alts and rows[0].figures["suspect"] == ""
     rep = json.loads((tmp_path / "out" / "vmc_a" / "report.json").read_text())
     assert rep["baseline_network"] == ref.report["baseline_network"]
+    # a run whose column-sensor spikes for one reading: its figures name the column
+    cells = [ln.split(",") for ln in lines[:401]]
+    k = cells[0].index("T_column")
+    cells[200][k] = str(float(cells[200][k]) + 60.0)
+    (d / "vmc_b.csv").write_text("\n".join(",".join(c) for c in cells) + "\n")
+    with pytest.warns(tr.errors.SuspectReadingWarning, match="vmc_b.csv: T_column jumps"):
+        rows = fleet.diagnose_runs(d, machine, tmp_path / "out3", network="best")
+    assert [(r.name, r.figures["suspect"]) for r in rows] == [("vmc_a", ""), ("vmc_b", "T_column")]
+    assert "suspect readings in T_column" in fleet.table(rows).splitlines()[-1]
     with pytest.raises(tr.ThermerrError, match="network: `fast`"):
         fleet.diagnose_runs(d, machine, tmp_path / "out2", network="fast")
     assert not (tmp_path / "out2").exists()
@@ -241,15 +250,16 @@ def test_diagnose_passes_the_network_rule_to_every_run(tmp_path):
 def test_the_table_and_summary_carry_a_verdicts_alternatives(tmp_path):
     """A diagnosis whose column the run cannot single out: the table says `or as well`, and the
     summary CSV has the alternatives as a comma-separated figure, as a fit's sensors."""
-    figs = {"verdict": "unmodeled_source", "column": "T_a", "alternatives": "T_b,T_c", "gain_pct": 40.0,
-            "baseline_rms": 2.0, "extended_rms": 1.2, "baseline_unique": True}
-    plain = dict(figs, alternatives="")
+    figs = {"verdict": "unmodeled_source", "column": "T_a", "alternatives": "T_b,T_c", "suspect": "",
+            "gain_pct": 40.0, "baseline_rms": 2.0, "extended_rms": 1.2, "baseline_unique": True}
+    plain = dict(figs, alternatives="", suspect="T_d,T_e")
     rows = [fleet.RunResult(run="m1.csv", name="m1", ok=True, out="o/m1", figures=figs),
             fleet.RunResult(run="m2.csv", name="m2", ok=True, out="o/m2", figures=plain)]
     text = fleet.table(rows).splitlines()
     assert "unmodeled_source (T_a, or as well T_b, T_c): RMS 2.000 -> 1.200" in text[-2]
-    assert "unmodeled_source (T_a): RMS" in text[-1]
+    assert "unmodeled_source (T_a): RMS" in text[-1] and "gain 40.0 %; suspect readings in T_d, T_e" in text[-1]
+    assert "suspect" not in text[-2]
     fleet.write_summary(rows, tmp_path)
     with open(tmp_path / "fleet-summary.csv", newline="") as fh:
-        got = [r["alternatives"] for r in csv.DictReader(fh)]
-    assert got == ["T_b,T_c", ""]
+        got = [(r["alternatives"], r["suspect"]) for r in csv.DictReader(fh)]
+    assert got == [("T_b,T_c", ""), ("", "T_d,T_e")]

@@ -264,8 +264,9 @@ def _diagnose_task(path: str, machine_toml: str, machine_file: str, axis: str | 
         d.write(target)
         b, e = d.report["baseline"], d.report["extended"]
         alts = [a["column"] for a in d.causes[0]["alternatives"]] if d.column and d.causes else []
+        suspect = sorted({sp["column"] for sp in d.report.get("suspect_readings", [])})
         return str(target), _finite({"verdict": d.verdict, "column": d.column, "alternatives": ",".join(alts),
-                                     "gain_pct": d.gain_pct,
+                                     "suspect": ",".join(suspect), "gain_pct": d.gain_pct,
                                      "baseline_rms": float(b["rmse_um"]), "extended_rms": float(e["rmse_um"]),
                                      "baseline_unique": d.baseline_unique})
 
@@ -367,8 +368,9 @@ def table(results: Sequence[RunResult]) -> str:
 
             alts = also(f["alternatives"].split(",") if f.get("alternatives") else [])
             col = f" ({f['column']}{alts})" if f.get("column") else ""
+            sus = f"; suspect readings in {f['suspect'].replace(',', ', ')}" if f.get("suspect") else ""
             return (f"{f['verdict']}{col}: RMS {f['baseline_rms']:.3f} -> {f['extended_rms']:.3f} µm, "
-                    f"gain {f['gain_pct']:.1f} %")
+                    f"gain {f['gain_pct']:.1f} %{sus}")
         rate = f.get("compensation_rate")
         rate_s = "n/a" if rate is None else f"{100 * rate:.1f} %"
         return f"{f['axis']}: n {f['n']}, RMS {f['rms']:.4g} µm, max {f['max_abs']:.4g} µm, compensation {rate_s}"
@@ -473,7 +475,9 @@ def diagnose_runs(
     ``calibrated.toml``, ``extended.toml``). Each run is calibrated on its first 70 % and scored
     on the rest (``holdout_fraction``). ``figures``: ``verdict``, ``column`` (with
     ``alternatives``: the other columns that explain the held-out error as well, comma-separated,
-    as ``sensors`` of a fit; see :attr:`~thermerr_rs.thermal.Diagnosis.causes`), ``gain_pct``,
+    as ``sensors`` of a fit; see :attr:`~thermerr_rs.thermal.Diagnosis.causes`), ``suspect``
+    (the columns with suspect readings, comma-separated: a jump or a frozen reading, listed in the
+    run's ``report.json`` as ``suspect_readings``), ``gain_pct``,
     ``baseline_rms`` and ``extended_rms`` (held-out, µm), and ``baseline_unique`` (False where a
     recalibrated baseline has a second solution: :attr:`~thermerr_rs.thermal.Diagnosis.baseline_unique`).
     ``network``: the baseline's network
