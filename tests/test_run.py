@@ -41,6 +41,8 @@ def test_example_run_reads(example_run1):
         ("time_s,T_a,E_z\n0,1,0\n150,,1\n", ["row 2", "`T_a`", "missing value"]),
         ("time_s,T_a,E_z\n0,1,0\n150,NaN,1\n", ["row 2", "`T_a`", "missing value"]),
         ("time_s,T_a\n0,1,7\n", ["3 fields", "header has 2"]),
+        # a Windows logger's CRLF line ends and a blank line: the file's own line numbers
+        ("time_s,T_a,E_z\r\n0,1,0\r\n\r\n150,warm,1\r\n", ["line 4,", "row 2", "`T_a`", "not a number"]),
         ("time_s,T_a,T_a\n0,1,2\n", ["appears twice"]),
     ],
 )

@@ -104,7 +104,10 @@ impl Run {
             .delimiter(delimiter)
             .trim(csv::Trim::All)
             .from_reader(bytes);
-        let header = rdr.headers().map_err(|e| csv_error(&file, e))?.clone();
+        let header = rdr
+            .headers()
+            .map_err(|e| csv_error(&file, bytes, e))?
+            .clone();
         let names: Vec<String> = header.iter().map(str::to_string).collect();
         if let [only] = names.as_slice() {
             // one column whose name holds another delimiter: say so before "no time_s column"
@@ -140,14 +143,20 @@ impl Run {
         let mut lines: Vec<u64> = Vec::new();
         let mut record = csv::StringRecord::new();
         let mut row = 0u64;
+        // the file's line of each record, counted here from its byte offset: the csv crate's
+        // own count is one short after CRLF line ends and blank lines (rust-csv #395, #208)
+        let mut lines_to = LineCount::default();
         loop {
             match rdr.read_record(&mut record) {
                 Ok(false) => break,
                 Ok(true) => {}
-                Err(e) => return Err(csv_error(&file, e)),
+                Err(e) => return Err(csv_error(&file, bytes, e)),
             }
             row += 1;
-            let line = record.position().map(|p| p.line()).unwrap_or(row + 1);
+            let line = record
+                .position()
+                .map(|p| lines_to.line_at(bytes, p.byte()))
+                .unwrap_or(row + 1);
             for (j, cell) in record.iter().enumerate() {
                 if !parsed[j] {
                     cells[j].push(f64::NAN);
@@ -437,8 +446,38 @@ fn parse_cell(cell: &str) -> Option<f64> {
     cell.parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
-fn csv_error(file: &str, e: csv::Error) -> Error {
-    let line = e.position().map(|p| p.line());
+/// Lines of a text up to a byte offset, counted incrementally for offsets that only grow.
+#[derive(Default)]
+struct LineCount {
+    scanned: usize,
+    newlines: u64,
+}
+
+impl LineCount {
+    /// The 1-based line of the record the csv reader says starts at `offset` of `bytes`: the
+    /// first byte there that ends no line (the reader's offset can sit on the LF of the
+    /// previous CRLF, or before blank lines).
+    fn line_at(&mut self, bytes: &[u8], offset: u64) -> u64 {
+        let mut end = (offset as usize).min(bytes.len());
+        while end < bytes.len() && matches!(bytes[end], b'\r' | b'\n') {
+            end += 1;
+        }
+        if end < self.scanned {
+            *self = LineCount::default();
+        }
+        self.newlines += bytes[self.scanned..end]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count() as u64;
+        self.scanned = end;
+        self.newlines + 1
+    }
+}
+
+fn csv_error(file: &str, bytes: &[u8], e: csv::Error) -> Error {
+    let line = e
+        .position()
+        .map(|p| LineCount::default().line_at(bytes, p.byte()));
     let reason = match e.kind() {
         csv::ErrorKind::Utf8 { err, .. } => {
             format!("not valid UTF-8 (field {})", err.field() + 1)
@@ -452,7 +491,8 @@ fn csv_error(file: &str, e: csv::Error) -> Error {
     Error::Parse {
         file: file.to_string(),
         line,
-        row: line.map(|l| l.saturating_sub(1)),
+        // the header is record 0
+        row: e.position().map(|p| p.record()).filter(|&r| r > 0),
         column: None,
         reason,
     }
@@ -540,6 +580,24 @@ mod tests {
     fn err(text: &[u8], nan: NanPolicy) -> String {
         let p = write(text);
         Run::read_csv(&p.0, nan).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn lines_are_the_files_own_with_crlf_ends_and_blank_lines() {
+        // a Windows logger's CRLF, and a blank line before the bad cell: line 5 of the file
+        for text in [
+            &b"time_s,T_a,E_z\r\n0,20,0\r\n15,21,0\r\n\r\n30,,0\r\n"[..],
+            &b"time_s,T_a,E_z\n0,20,0\n15,21,0\n\n30,,0\n"[..],
+        ] {
+            let e = err(text, NanPolicy::Error);
+            assert!(e.contains(", line 5, row 3, column `T_a`"), "{e}");
+        }
+        // a row with too few fields, after CRLF ends
+        let e = err(b"time_s,T_a,E_z\r\n0,20,0\r\n15,21\r\n", NanPolicy::Error);
+        assert!(
+            e.contains(", line 3, row 2") && e.contains("2 fields"),
+            "{e}"
+        );
     }
 
     #[test]
