@@ -242,6 +242,7 @@ def test_suspect_readings_are_said_not_changed(tmp_path, capsys):
     with pytest.warns(SuspectReadingWarning, match="T_column repeats"):
         _, s = Machine.identify(tr.read_run(run))
     assert sum(n.startswith("suspect reading: ") for n in s["notes"]) == 2
+    assert [(x["column"], x["kind"]) for x in s["suspect_readings"]] == [("T_column", "jump"), ("T_column", "repeat")]
     # the clean run: nothing suspect
     d = diagnose(tr.Run.from_frame(clean, source="clean"), Machine.from_toml(c.nominal_toml()), progress=False)
     assert d.report["suspect_readings"] == [] and "warning:" not in str(d)

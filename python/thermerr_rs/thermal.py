@@ -77,7 +77,9 @@ class Machine:
         ``sensor``, ``members``, ``tau_fit_s``, ``tau_s``, ``heated_by``), ``axes`` (each with
         ``train_rmse_um`` and ``holdout_rmse_um``), ``copies`` (second sensors on a part: each
         ``column``, the node's sensor ``of``, ``tau_s``, ``gain``, ``noise_ratio``), ``spare``,
-        ``links``, ``sources``, ``node_rule`` and
+        ``links``, ``sources``, ``node_rule``, ``suspect_readings`` (readings the run itself
+        makes suspect, as in a diagnosis's report; also warned as
+        :class:`~thermerr_rs.errors.SuspectReadingWarning`) and
         ``toml``, the file with a comment on every choice (what ``thermerr init`` writes).
         Bad input (no ``T_*`` column, no ``E_*`` axis, an unknown ``ambient``, more ``nodes``
         than sensors) raises a :class:`~thermerr_rs.errors.DataError` naming the run and the entry.
@@ -86,7 +88,7 @@ class Machine:
         inner, summary = _core.MachineModel.identify(*_run_args(run), axes=ax, nodes=nodes, ambient=ambient,
                                                      train_fraction=train_fraction, seed=seed, max_iter=max_iter)
         s: dict[str, Any] = json.loads(summary)
-        _warn_suspects(n[len(SUSPECT_NOTE):] for n in s["notes"] if n.startswith(SUSPECT_NOTE))
+        _warn_suspects(sp["text"] for sp in s["suspect_readings"])
         return cls(inner), s
 
     def to_toml(self) -> str:
@@ -237,10 +239,6 @@ class Diagnosis:
             more += f"unexplained remainder: {self.remainder_um:.3f} µm RMS above the probe noise\n"
         return (f"verdict: {head}\n{self.evidence}\n{more}"
                 f"held-out RMS: baseline {b['rmse_um']:.3f} µm, extended {e['rmse_um']:.3f} µm, gain {self.gain_pct:.1f} %")
-
-
-# how identification's notes mark a suspect reading (rust/thermerr-core/src/thermal/identify.rs)
-SUSPECT_NOTE = "suspect reading: "
 
 
 def _unique_suspects(lists: Iterable[list[dict[str, Any]]]) -> list[dict[str, Any]]:

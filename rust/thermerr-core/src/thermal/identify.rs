@@ -220,6 +220,8 @@ pub struct Identification {
     /// members of that node, not nodes of their own.
     pub copies: Vec<LaggedCopy>,
     pub notes: Vec<String>,
+    /// Readings the run itself makes suspect (said in `notes` as well, not changed).
+    pub suspect_readings: Vec<crate::guard::Suspect>,
     pub calibration_iterations: usize,
     pub calibration_converged: bool,
 }
@@ -861,7 +863,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let t = &run.time_s[..m];
     let mut notes = Vec::new();
     // readings the run itself makes suspect: said, not changed
-    {
+    let suspect_readings = {
         let names: Vec<&str> = ck
             .temps
             .iter()
@@ -869,9 +871,10 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             .chain(ck.axes.iter().map(String::as_str))
             .collect();
         let cols: Vec<&[f64]> = names.iter().map(|c| view.col(c)).collect::<Result<_>>()?;
-        for sp in crate::guard::suspect_readings(&file, &names, &cols, &run.time_s) {
-            notes.push(format!("suspect reading: {}", sp.text));
-        }
+        crate::guard::suspect_readings(&file, &names, &cols, &run.time_s)
+    };
+    for sp in &suspect_readings {
+        notes.push(format!("suspect reading: {}", sp.text));
     }
 
     // 1. ambient
@@ -1631,6 +1634,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         copies,
         notes,
         calibration_iterations: cal.n_iter,
+        suspect_readings,
         calibration_converged: cal.converged,
     };
     id.toml = commented_toml(&id)?;
