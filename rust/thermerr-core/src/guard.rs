@@ -702,7 +702,7 @@ pub fn suspect_readings(
         if col.len() != n || col.iter().any(|v| !v.is_finite()) {
             continue;
         }
-        let mut rates: Vec<f64> = (1..n)
+        let rates: Vec<f64> = (1..n)
             .map(|i| (col[i] - col[i - 1]).abs() / (time[i] - time[i - 1]).max(f64::MIN_POSITIVE))
             .collect();
         let mut sorted = rates.clone();
@@ -710,8 +710,8 @@ pub fn suspect_readings(
         let q99 = sorted[((sorted.len() - 1) as f64 * 0.99).round() as usize];
         let limit = (JUMP_FACTOR * q99).max(JUMP_FLOOR / step);
         let (mut count, mut first, mut largest) = (0usize, 0usize, 0.0f64);
-        for (k, r) in rates.iter_mut().enumerate() {
-            if *r > limit {
+        for (k, &r) in rates.iter().enumerate() {
+            if r > limit {
                 if count == 0 {
                     first = k + 1;
                 }

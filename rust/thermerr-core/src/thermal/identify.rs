@@ -241,12 +241,7 @@ fn fit(basis: &[Vec<f64>], y: &[f64]) -> Result<(Vec<f64>, f64)> {
     let rows = y.len();
     let a = faer::Mat::from_fn(rows, basis.len(), |i, j| basis[j][i]);
     let c = lstsq(a.as_ref(), y)?;
-    let ssr = (0..rows)
-        .map(|i| {
-            let f: f64 = basis.iter().zip(&c).map(|(b, c)| b[i] * c).sum();
-            (y[i] - f).powi(2)
-        })
-        .sum();
+    let ssr = misfit(basis, &c, y);
     Ok((c, ssr))
 }
 
