@@ -245,8 +245,15 @@ fn gram_run(
         }
     }
     mean.iter_mut().for_each(|v| *v /= n as f64);
-    let xc = faer::Mat::from_fn(n, d, |i, j| x.get(i, j) - mean[j]);
-    let g = &xc * xc.transpose();
+    // the mean-centred objects, row-major, and their Gram matrix in a fixed order of operations
+    // (the same bits on every CPU: sensor grouping decides the identified network)
+    let xc: Vec<f64> = x
+        .rows()
+        .flat_map(|r| r.iter().zip(&mean).map(|(v, m)| v - m))
+        .collect();
+    let objects: Vec<&[f64]> = xc.chunks_exact(d).collect();
+    let gflat = crate::linalg::gram(&objects, d)?;
+    let g = |k: usize, l: usize| gflat[k * n + l];
     let mut u_prev: Vec<f64> = u0.iter().map(|v| v.max(EPS)).collect();
     let mut u_new = vec![0.0; n * c];
     let mut w = vec![0.0; n * c];
@@ -271,7 +278,7 @@ fn gram_run(
             for i in 0..c {
                 let mut acc = 0.0;
                 for l in 0..n {
-                    acc += g[(k, l)] * w[l * c + i];
+                    acc += g(k, l) * w[l * c + i];
                 }
                 gw[k * c + i] = acc;
             }
@@ -285,7 +292,7 @@ fn gram_run(
         let mut objective = 0.0;
         for k in 0..n {
             for i in 0..c {
-                let d2 = g[(k, k)] - 2.0 * gw[k * c + i] / s[i] + vv[i] / (s[i] * s[i]);
+                let d2 = g(k, k) - 2.0 * gw[k * c + i] / s[i] + vv[i] / (s[i] * s[i]);
                 let dk = d2.max(0.0).sqrt().max(EPS);
                 dist[k * c + i] = dk;
                 objective += w[k * c + i] * dk * dk;

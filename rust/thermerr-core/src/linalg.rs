@@ -59,6 +59,65 @@ pub fn lstsq(a: MatRef<'_, f64>, b: &[f64]) -> Result<Vec<f64>> {
     Ok(x)
 }
 
+/// Minimises ‖Σⱼ xⱼ·colsⱼ − b‖₂ as [`lstsq`] does (QR where the columns have full rank, else the
+/// SVD's minimum-norm solution with numpy's cut-off), on nalgebra's unblocked Householder QR and
+/// SVD, whose order of operations is fixed by the code (no CPU-dispatched kernels): the same bits
+/// on every machine. For the thermal network's fits, whose verdicts on a real run move with the
+/// last bits; the estimators keep faer's faster blocked [`lstsq`].
+pub fn lstsq_columns(cols: &[&[f64]], b: &[f64]) -> Result<Vec<f64>> {
+    let (m, n) = (b.len(), cols.len());
+    if cols.iter().any(|c| c.len() != m) {
+        return Err(Error::Shape(format!(
+            "least squares: {m} right-hand sides but a column of another length"
+        )));
+    }
+    if m == 0 || n == 0 {
+        return Err(Error::Shape("least squares on an empty system".into()));
+    }
+    let a = nalgebra::DMatrix::from_fn(m, n, |i, j| cols[j][i]);
+    let rhs = nalgebra::DVector::from_column_slice(b);
+    let tol = f64::EPSILON * m.max(n) as f64;
+    if m >= n {
+        let scale = cols
+            .iter()
+            .map(|c| dot(c, c).sqrt())
+            .fold(0.0_f64, f64::max);
+        let qr = a.clone().qr();
+        let r = qr.r();
+        let full_rank = scale > 0.0 && (0..n).all(|i| r[(i, i)].abs() > tol * scale * 1e3);
+        if full_rank {
+            let mut qtb = rhs.clone();
+            qr.q_tr_mul(&mut qtb);
+            let top = qtb.rows(0, n).into_owned();
+            let x = r
+                .solve_upper_triangular(&top)
+                .ok_or_else(|| Error::Numerical("least squares: R is singular".into()))?;
+            return finite(x.iter().copied().collect(), "least squares");
+        }
+    }
+    let svd = a.svd(true, true);
+    let smax = svd.singular_values.max();
+    if smax == 0.0 {
+        return Err(Error::Numerical(
+            "least squares on an all-zero matrix".into(),
+        ));
+    }
+    let x = svd
+        .solve(&rhs, tol * smax)
+        .map_err(|e| Error::Numerical(format!("least squares: {e}")))?;
+    finite(x.iter().copied().collect(), "least squares")
+}
+
+fn finite(v: Vec<f64>, what: &str) -> Result<Vec<f64>> {
+    if v.iter().all(|t| t.is_finite()) {
+        Ok(v)
+    } else {
+        Err(Error::Numerical(format!(
+            "{what} produced non-finite values"
+        )))
+    }
+}
+
 /// Whether every value is finite: the exponent bits tested over blocks without an early exit
 /// per value (which keeps a scan over a whole simulation from vectorising).
 pub fn all_finite(xs: &[f64]) -> bool {
@@ -70,20 +129,153 @@ pub fn all_finite(xs: &[f64]) -> bool {
 }
 
 /// Σ aᵢ·bᵢ over the shorter of the two, in eight interleaved partial sums (which the compiler
-/// turns into vector instructions; a single running sum cannot be reordered).
+/// turns into vector instructions; a single running sum cannot be reordered). The order of the
+/// operations is fixed by this code alone, not by the CPU: the same bits on every machine.
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     let (a, b) = (&a[..n], &b[..n]);
-    let mut acc = [0.0; 8];
-    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
-    let (ra, rb) = (ca.remainder(), cb.remainder());
-    for (x, y) in ca.zip(cb) {
-        for k in 0..8 {
+    let mut acc = [0.0; LANES];
+    let body = n / LANES * LANES;
+    lanes_add(&mut acc, &a[..body], &b[..body]);
+    lanes_finish(&acc, &a[body..], &b[body..])
+}
+
+const LANES: usize = 8;
+
+/// accᵢ += Σ over the rows k ≡ i (mod 8) of aₖ·bₖ, row by row (`a.len()` a multiple of 8)
+#[inline(always)]
+fn lanes_add(acc: &mut [f64; LANES], a: &[f64], b: &[f64]) {
+    for (x, y) in a.chunks_exact(LANES).zip(b.chunks_exact(LANES)) {
+        for k in 0..LANES {
             acc[k] += x[k] * y[k];
         }
     }
-    let tail: f64 = ra.iter().zip(rb).map(|(x, y)| x * y).sum();
+}
+
+/// The partial sums combined, plus the rows past the last full group of eight.
+#[inline(always)]
+fn lanes_finish(acc: &[f64; LANES], ta: &[f64], tb: &[f64]) -> f64 {
+    let tail: f64 = ta.iter().zip(tb).map(|(x, y)| x * y).sum();
     ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
+}
+
+/// The Gram matrix CᵀC of `cols` over their first `rows` entries, n × n row-major, each entry
+/// exactly [`dot`] of its two columns (the same bits): the products are accumulated over blocks
+/// of rows that stay in cache, in the same order as one `dot` after the other would. Where the
+/// CPU has AVX2 the same operations run four lanes at a time (no fused multiply-add: the
+/// result does not depend on the CPU). It replaces a BLAS product whose kernels, and so whose
+/// rounding, differ between CPUs (faer-rs #134): a calibration's verdicts on a real run move
+/// with the last bits.
+pub fn gram(cols: &[&[f64]], rows: usize) -> Result<Vec<f64>> {
+    if cols.iter().any(|c| c.len() < rows) {
+        return Err(Error::Shape(format!(
+            "Gram matrix: a column is shorter than {rows} rows"
+        )));
+    }
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, checked on the line above
+        return Ok(unsafe { gram_avx2(cols, rows) });
+    }
+    Ok(gram_lanes(cols, rows))
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn gram_avx2(cols: &[&[f64]], rows: usize) -> Vec<f64> {
+    gram_lanes(cols, rows)
+}
+
+#[inline(always)]
+fn gram_lanes(cols: &[&[f64]], rows: usize) -> Vec<f64> {
+    // rows per block: n columns of it stay in the first-level cache
+    const BLOCK: usize = 64;
+    let n = cols.len();
+    let body = rows / LANES * LANES;
+    let mut acc = vec![[0.0; LANES]; n * (n + 1) / 2];
+    let mut lo = 0;
+    while lo < body {
+        let hi = (lo + BLOCK).min(body);
+        let mut p = 0;
+        for i in 0..n {
+            let a = &cols[i][lo..hi];
+            for c in &cols[..=i] {
+                lanes_add(&mut acc[p], a, &c[lo..hi]);
+                p += 1;
+            }
+        }
+        lo = hi;
+    }
+    let mut g = vec![0.0; n * n];
+    let mut p = 0;
+    for i in 0..n {
+        for j in 0..=i {
+            let v = lanes_finish(&acc[p], &cols[i][body..rows], &cols[j][body..rows]);
+            g[i * n + j] = v;
+            g[j * n + i] = v;
+            p += 1;
+        }
+    }
+    g
+}
+
+/// The Cholesky factor L (A = L·Lᵀ) of a symmetric positive definite n × n matrix, computed
+/// and applied in a fixed order of operations (the same bits on every CPU; the systems here
+/// are a few dozen unknowns).
+pub struct Cholesky {
+    n: usize,
+    /// row-major, lower triangle
+    l: Vec<f64>,
+}
+
+impl Cholesky {
+    /// Factors `a` (row-major; only its lower triangle is read). `None` if A is not positive
+    /// definite to working precision (or not n × n).
+    pub fn new(a: &[f64], n: usize) -> Option<Cholesky> {
+        if a.len() != n * n {
+            return None;
+        }
+        let mut l = vec![0.0; n * n];
+        for i in 0..n {
+            for j in 0..=i {
+                let mut s = a[i * n + j];
+                for k in 0..j {
+                    s -= l[i * n + k] * l[j * n + k];
+                }
+                if i == j {
+                    // also false for NaN
+                    if !(s > 0.0 && s.is_finite()) {
+                        return None;
+                    }
+                    l[i * n + i] = s.sqrt();
+                } else {
+                    l[i * n + j] = s / l[j * n + j];
+                }
+            }
+        }
+        Some(Cholesky { n, l })
+    }
+
+    /// x with A x = b (`b` of length n).
+    pub fn solve(&self, b: &[f64]) -> Vec<f64> {
+        let (n, l) = (self.n, &self.l);
+        let mut x = b.to_vec();
+        for i in 0..n {
+            let mut s = x[i];
+            for k in 0..i {
+                s -= l[i * n + k] * x[k];
+            }
+            x[i] = s / l[i * n + i];
+        }
+        for i in (0..n).rev() {
+            let mut s = x[i];
+            for k in i + 1..n {
+                s -= l[k * n + i] * x[k];
+            }
+            x[i] = s / l[i * n + i];
+        }
+        x
+    }
 }
 
 /// Minimises Σᵢ ((Σⱼ xⱼ·colsⱼ[i] − yᵢ)/σ)² + Σⱼ ((xⱼ − cⱼ)/sⱼ)² over the first `rows` rows: a
@@ -111,25 +303,25 @@ pub fn lstsq_with_prior(
     }
     let w = 1.0 / (sigma * sigma);
     let dot = |a: &[f64], b: &[f64]| dot(&a[..rows], &b[..rows]);
-    let mut gram = Mat::<f64>::zeros(nb, nb);
+    let mut gram = vec![0.0; nb * nb];
     for i in 0..nb {
         for j in 0..=i {
             let g = w * dot(cols[i], cols[j]);
-            gram[(i, j)] = g;
-            gram[(j, i)] = g;
+            gram[i * nb + j] = g;
+            gram[j * nb + i] = g;
         }
-        gram[(i, i)] += 1.0 / (prior[i].1 * prior[i].1);
+        gram[i * nb + i] += 1.0 / (prior[i].1 * prior[i].1);
     }
-    let chol = gram.llt(faer::Side::Lower).map_err(|_| {
+    let chol = Cholesky::new(&gram, nb).ok_or_else(|| {
         Error::Numerical(
             "least squares with a prior: the normal equations are not positive definite".into(),
         )
     })?;
     // right-hand side of the normal equations for a residual (r_data, x)
-    let rhs = |r: &[f64], x: &[f64]| {
-        Mat::from_fn(nb, 1, |j, _| {
-            w * dot(cols[j], r) + (prior[j].0 - x[j]) / (prior[j].1 * prior[j].1)
-        })
+    let rhs = |r: &[f64], x: &[f64]| -> Vec<f64> {
+        (0..nb)
+            .map(|j| w * dot(cols[j], r) + (prior[j].0 - x[j]) / (prior[j].1 * prior[j].1))
+            .collect()
     };
     let mut x = vec![0.0; nb];
     let mut r: Vec<f64> = y[..rows].to_vec();
@@ -143,8 +335,8 @@ pub fn lstsq_with_prior(
             }
         }
         let d = chol.solve(&rhs(&r, &x));
-        for (j, xj) in x.iter_mut().enumerate() {
-            *xj += d[(j, 0)];
+        for (xj, dj) in x.iter_mut().zip(d) {
+            *xj += dj;
         }
     }
     if x.iter().all(|v| v.is_finite()) {
@@ -183,14 +375,7 @@ pub fn solve(a: MatRef<'_, f64>, b: &[f64]) -> Result<Vec<f64>> {
 }
 
 fn finite_vec(x: MatRef<'_, f64>, what: &str) -> Result<Vec<f64>> {
-    let v: Vec<f64> = (0..x.nrows()).map(|i| x[(i, 0)]).collect();
-    if v.iter().all(|t| t.is_finite()) {
-        Ok(v)
-    } else {
-        Err(Error::Numerical(format!(
-            "{what} produced non-finite values"
-        )))
-    }
+    finite((0..x.nrows()).map(|i| x[(i, 0)]).collect(), what)
 }
 
 #[cfg(test)]
@@ -213,6 +398,85 @@ mod tests {
                 assert_eq!(all_finite(&ys), ys.iter().all(|v| v.is_finite()));
             }
         }
+    }
+
+    /// Columns of awkward lengths (not multiples of the lanes or the block) and sizes.
+    fn columns(n: usize, rows: usize) -> Vec<Vec<f64>> {
+        (0..n)
+            .map(|j| {
+                (0..rows)
+                    .map(|i| {
+                        ((i * 7919 + j * 104_729) % 1009) as f64 / 97.0 - 5.0 + 1e-9 * i as f64
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn gram_is_every_pair_s_dot_to_the_bit() {
+        for (n, rows) in [(1, 1), (3, 7), (5, 64), (7, 65), (23, 1945), (30, 11_671)] {
+            let cols = columns(n, rows + 3);
+            let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+            let g = gram(&refs, rows).unwrap();
+            for i in 0..n {
+                for j in 0..n {
+                    let want = dot(&cols[i][..rows], &cols[j][..rows]);
+                    assert_eq!(
+                        g[i * n + j].to_bits(),
+                        want.to_bits(),
+                        "{n}x{rows} ({i}, {j})"
+                    );
+                }
+            }
+            // the lanes without AVX2 give the same bits as the dispatched kernel
+            assert_eq!(gram_lanes(&refs, rows), g);
+        }
+        assert!(gram(&[&[1.0, 2.0][..]], 3).is_err());
+    }
+
+    #[test]
+    fn cholesky_solves_and_refuses_what_is_not_positive_definite() {
+        // A = MᵀM + I for a random-ish M: SPD; check A·x = b
+        let n = 12;
+        let cols = columns(n, 40);
+        let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+        let mut a = gram(&refs, 40).unwrap();
+        for i in 0..n {
+            a[i * n + i] += 1.0;
+        }
+        let b: Vec<f64> = (0..n).map(|i| i as f64 - 4.5).collect();
+        let x = Cholesky::new(&a, n).unwrap().solve(&b);
+        for i in 0..n {
+            let ax: f64 = (0..n).map(|j| a[i * n + j] * x[j]).sum();
+            assert_relative_eq!(ax, b[i], epsilon = 1e-9, max_relative = 1e-9);
+        }
+        assert!(Cholesky::new(&[1.0, 2.0, 2.0, 1.0], 2).is_none()); // indefinite
+        assert!(Cholesky::new(&[f64::NAN], 1).is_none());
+        assert!(Cholesky::new(&[1.0, 0.0, 0.0], 2).is_none()); // not n x n
+    }
+
+    #[test]
+    fn lstsq_columns_agrees_with_faer_s_lstsq() {
+        // full rank, tall: the same solution to rounding (1e-9 relative: both are backward
+        // stable QR solutions of a system with a condition number of about 1e2)
+        let cols = columns(6, 500);
+        let b: Vec<f64> = (0..500).map(|i| (i as f64 / 30.0).sin() * 3.0).collect();
+        let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+        let a = Mat::from_fn(500, 6, |i, j| cols[j][i]);
+        let want = lstsq(a.as_ref(), &b).unwrap();
+        let got = lstsq_columns(&refs, &b).unwrap();
+        for (g, w) in got.iter().zip(&want) {
+            assert_relative_eq!(g, w, epsilon = 1e-9, max_relative = 1e-9);
+        }
+        // two identical columns: the minimum-norm solution, as numpy's lstsq gives
+        let c: Vec<f64> = (0..4).map(|i| (i + 1) as f64).collect();
+        let b: Vec<f64> = c.iter().map(|v| 2.0 * v).collect();
+        let x = lstsq_columns(&[&c[..], &c[..]], &b).unwrap();
+        assert_relative_eq!(x[0], 1.0, epsilon = 1e-10);
+        assert_relative_eq!(x[1], 1.0, epsilon = 1e-10);
+        assert!(lstsq_columns(&[&c[..3]], &b).is_err());
+        assert!(lstsq_columns(&[&[0.0; 4][..]], &[0.0; 4]).is_err());
     }
 
     #[test]

@@ -6,11 +6,10 @@
 //! `Sync`. This is what calibration of the thermal network runs; it is generic and tested on its
 //! own here.
 
-use faer::linalg::solvers::Solve;
-use faer::{Mat, Side};
 use rayon::prelude::*;
 
 use crate::error::{Error, Result};
+use crate::linalg::{dot, gram, Cholesky};
 
 /// Options of [`least_squares`].
 #[derive(Clone, Debug)]
@@ -142,8 +141,9 @@ where
     let mut message = String::from("reached max_iter");
     let mut converged = false;
     let mut iter = 0;
-    // one Jacobian for every iteration: each column is overwritten whole (its length is checked)
-    let mut jac = Mat::<f64>::zeros(m, n);
+    // one Jacobian for every iteration, column-major: each column is overwritten whole (its
+    // length is checked)
+    let mut jac = vec![0.0; m * n];
     while iter < opts.max_iter {
         iter += 1;
         crate::interrupt::check()?;
@@ -164,14 +164,15 @@ where
             if c.len() != m {
                 return Err(Error::Shape("the residual vector changed length".into()));
             }
-            for (d, v) in jac.col_as_slice_mut(j).iter_mut().zip(&c) {
+            for (d, v) in jac[j * m..(j + 1) * m].iter_mut().zip(&c) {
                 *d = if v.is_finite() { *v } else { 0.0 };
             }
         }
-        let jtj = jac.transpose() * &jac;
-        let rv = Mat::from_fn(m, 1, |i, _| r[i]);
-        let g = jac.transpose() * &rv;
-        let gmax = (0..n).map(|j| g[(j, 0)].abs()).fold(0.0, f64::max);
+        // JᵀJ and Jᵀr in a fixed order of operations: the same steps on every CPU
+        let cols: Vec<&[f64]> = jac.chunks_exact(m).collect();
+        let jtj = gram(&cols, m)?;
+        let g: Vec<f64> = cols.iter().map(|c| dot(c, &r)).collect();
+        let gmax = g.iter().map(|v| v.abs()).fold(0.0, f64::max);
         if gmax < opts.gtol {
             message = "gradient below gtol".into();
             converged = true;
@@ -179,21 +180,21 @@ where
         }
         // Marquardt's diagonal scaling, floored relative to the largest entry so that
         // parameters with (almost) no influence do not make the damped system singular
-        let dmax = (0..n).map(|j| jtj[(j, j)]).fold(0.0_f64, f64::max);
+        let dmax = (0..n).map(|j| jtj[j * n + j]).fold(0.0_f64, f64::max);
         let floor = (dmax * 1e-10).max(1e-300);
         let mut accepted = false;
         for _ in 0..40 {
             let mut a = jtj.clone();
             for j in 0..n {
-                a[(j, j)] += lambda * jtj[(j, j)].max(floor);
+                a[j * n + j] += lambda * jtj[j * n + j].max(floor);
             }
-            let Ok(chol) = a.llt(Side::Lower) else {
+            let Some(chol) = Cholesky::new(&a, n) else {
                 lambda *= 4.0;
                 continue;
             };
-            let neg_g = Mat::from_fn(n, 1, |j, _| -g[(j, 0)]);
+            let neg_g: Vec<f64> = g.iter().map(|v| -v).collect();
             let delta = chol.solve(&neg_g);
-            let trial: Vec<f64> = (0..n).map(|j| theta[j] + delta[(j, 0)]).collect();
+            let trial: Vec<f64> = (0..n).map(|j| theta[j] + delta[j]).collect();
             let rt = f(&to_p(&trial, lo, hi))?;
             n_eval += 1;
             let ct = if rt.len() == m && rt.iter().all(|v| v.is_finite()) {
@@ -202,7 +203,7 @@ where
                 f64::INFINITY
             };
             if ct < cost {
-                let step = (0..n).map(|j| delta[(j, 0)].abs()).fold(0.0, f64::max);
+                let step = delta.iter().map(|v| v.abs()).fold(0.0, f64::max);
                 let rel = (cost - ct) / cost.max(f64::MIN_POSITIVE);
                 let cost_before = cost;
                 theta = trial;

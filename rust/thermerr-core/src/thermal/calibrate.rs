@@ -10,14 +10,12 @@
 
 use std::collections::BTreeMap;
 
-use faer::Mat;
-
 use super::machine::{Machine, NodeSpec};
 use super::sim::{
     drift_terms, finish, lag, median_step, simulate_nodes, Init, RunView, Simulation, Thinned,
 };
 use crate::error::{Error, Result};
-use crate::linalg::{lstsq, lstsq_with_prior};
+use crate::linalg::{lstsq_columns, lstsq_with_prior};
 use crate::optim::{least_squares, LmOptions};
 
 /// One free parameter and where it lives in the machine.
@@ -664,8 +662,8 @@ pub fn fit_initial_offsets(m: &Machine, run: &RunView<'_>, window: usize) -> Res
             rhs.push(meas[k] - pred);
         }
     }
-    let a = Mat::from_fn(rhs.len(), cols.len(), |r, c| cols[c][r]);
-    let sol = lstsq(a.as_ref(), &rhs)?;
+    let cols: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    let sol = lstsq_columns(&cols, &rhs)?;
     let mut off = vec![0.0; nn];
     for (&(j, _), v) in sensed.iter().zip(sol) {
         off[j] = v.clamp(-2.0, 2.0);

@@ -68,7 +68,7 @@ use super::machine::{
 use super::sim::{lag, simulate, Init, RunView};
 use crate::error::{Error, Result};
 use crate::fcm::FcmParams;
-use crate::linalg::lstsq;
+use crate::linalg::lstsq_columns;
 use crate::metrics::pearson;
 use crate::run::Run;
 use crate::samples::Samples;
@@ -238,9 +238,8 @@ fn lowpass(t: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
 
 /// Least squares without intercept; returns the coefficients and the residual sum of squares.
 fn fit(basis: &[Vec<f64>], y: &[f64]) -> Result<(Vec<f64>, f64)> {
-    let rows = y.len();
-    let a = faer::Mat::from_fn(rows, basis.len(), |i, j| basis[j][i]);
-    let c = lstsq(a.as_ref(), y)?;
+    let cols: Vec<&[f64]> = basis.iter().map(Vec::as_slice).collect();
+    let c = lstsq_columns(&cols, y)?;
     let ssr = misfit(basis, &c, y);
     Ok((c, ssr))
 }
