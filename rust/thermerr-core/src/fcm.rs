@@ -36,6 +36,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::linear::check_features;
+use crate::portable;
 use crate::samples::{check_finite, Matrix, Samples};
 
 const EPS: f64 = f64::EPSILON;
@@ -547,7 +548,11 @@ fn weights(u: &[f64], w: &mut [f64], m: f64) {
     let s: f64 = u.iter().sum();
     for (wi, ui) in w.iter_mut().zip(u) {
         let v = (ui / s).max(EPS);
-        *wi = if m == 2.0 { v * v } else { v.powf(m) };
+        *wi = if m == 2.0 {
+            v * v
+        } else {
+            portable::powf(v, m)
+        };
     }
 }
 
@@ -562,7 +567,11 @@ fn memberships(dist: &[f64], u: &mut [f64], m: f64) {
     let mn = u.iter().fold(f64::INFINITY, |a, &b| a.min(b));
     for ui in u.iter_mut() {
         let r = *ui / mn;
-        *ui = if e == -2.0 { 1.0 / (r * r) } else { r.powf(e) };
+        *ui = if e == -2.0 {
+            1.0 / (r * r)
+        } else {
+            portable::powf(r, e)
+        };
     }
     let s: f64 = u.iter().sum();
     u.iter_mut().for_each(|v| *v /= s);

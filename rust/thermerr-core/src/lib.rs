@@ -26,6 +26,8 @@ pub mod nn;
 #[cfg(feature = "fit")]
 pub mod optim;
 #[cfg(feature = "fit")]
+pub mod portable;
+#[cfg(feature = "fit")]
 pub mod progress;
 pub mod rbf;
 #[cfg(feature = "fit")]

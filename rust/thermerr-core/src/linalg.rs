@@ -192,6 +192,7 @@ fn gram_lanes(cols: &[&[f64]], rows: usize) -> Vec<f64> {
     const BLOCK: usize = 64;
     let n = cols.len();
     let body = rows / LANES * LANES;
+    // the accumulators of the lower triangle's pairs (i, j ≤ i), row after row of it
     let mut acc = vec![[0.0; LANES]; n * (n + 1) / 2];
     let mut lo = 0;
     while lo < body {
@@ -199,10 +200,19 @@ fn gram_lanes(cols: &[&[f64]], rows: usize) -> Vec<f64> {
         let mut p = 0;
         for i in 0..n {
             let a = &cols[i][lo..hi];
-            for c in &cols[..=i] {
-                lanes_add(&mut acc[p], a, &c[lo..hi]);
-                p += 1;
+            let row = &mut acc[p..p + i + 1];
+            // four pairs at a time: column i's values loaded once for four others
+            let mut quads = row.chunks_exact_mut(4);
+            let mut j = 0;
+            for q in &mut quads {
+                let b = [0, 1, 2, 3].map(|d| &cols[j + d][lo..hi]);
+                lanes_add4(q, a, b);
+                j += 4;
             }
+            for (s, c) in quads.into_remainder().iter_mut().zip(&cols[j..=i]) {
+                lanes_add(s, a, &c[lo..hi]);
+            }
+            p += i + 1;
         }
         lo = hi;
     }
@@ -217,6 +227,22 @@ fn gram_lanes(cols: &[&[f64]], rows: usize) -> Vec<f64> {
         }
     }
     g
+}
+
+/// [`lanes_add`] for four pairs (a, b₀..b₃) at once, each accumulator in the same order.
+#[inline(always)]
+fn lanes_add4(acc: &mut [[f64; LANES]], a: &[f64], b: [&[f64]; 4]) {
+    let mut s = [acc[0], acc[1], acc[2], acc[3]];
+    for (g, x) in a.chunks_exact(LANES).enumerate() {
+        let o = g * LANES;
+        for (sd, bd) in s.iter_mut().zip(&b) {
+            let y = &bd[o..o + LANES];
+            for k in 0..LANES {
+                sd[k] += x[k] * y[k];
+            }
+        }
+    }
+    acc[..4].copy_from_slice(&s);
 }
 
 /// The Cholesky factor L (A = L·Lᵀ) of a symmetric positive definite n × n matrix, computed

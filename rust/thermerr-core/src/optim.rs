@@ -10,6 +10,7 @@ use rayon::prelude::*;
 
 use crate::error::{Error, Result};
 use crate::linalg::{dot, gram, Cholesky};
+use crate::portable;
 
 /// Options of [`least_squares`].
 #[derive(Clone, Debug)]
@@ -63,9 +64,9 @@ pub struct LmResult {
 
 fn sigmoid(t: f64) -> f64 {
     if t >= 0.0 {
-        1.0 / (1.0 + (-t).exp())
+        1.0 / (1.0 + portable::exp(-t))
     } else {
-        let e = t.exp();
+        let e = portable::exp(t);
         e / (1.0 + e)
     }
 }
@@ -84,7 +85,7 @@ fn to_theta(p: &[f64], lo: &[f64], hi: &[f64]) -> Vec<f64> {
         .map(|(v, (l, h))| {
             // keep starts off the flat tails of the logistic, where the gradient vanishes
             let s = ((v - l) / (h - l)).clamp(1e-6, 1.0 - 1e-6);
-            (s / (1.0 - s)).ln()
+            portable::ln(s / (1.0 - s))
         })
         .collect()
 }
@@ -266,11 +267,14 @@ mod tests {
     fn exponential_fit() {
         // y = a·exp(−t/τ) + c, noiseless: recovers the parameters
         let t: Vec<f64> = (0..50).map(|k| k as f64 * 10.0).collect();
-        let y: Vec<f64> = t.iter().map(|t| 3.0 * (-t / 120.0).exp() + 0.5).collect();
+        let y: Vec<f64> = t
+            .iter()
+            .map(|t| 3.0 * portable::exp(-t / 120.0) + 0.5)
+            .collect();
         let f = |p: &[f64]| {
             Ok(t.iter()
                 .zip(&y)
-                .map(|(t, y)| p[0] * (-t / p[1]).exp() + p[2] - y)
+                .map(|(t, y)| p[0] * portable::exp(-t / p[1]) + p[2] - y)
                 .collect())
         };
         let r = least_squares(

@@ -17,6 +17,7 @@ use super::sim::{
 use crate::error::{Error, Result};
 use crate::linalg::{lstsq_columns, lstsq_with_prior};
 use crate::optim::{least_squares, LmOptions};
+use crate::portable;
 
 /// One free parameter and where it lives in the machine.
 #[derive(Clone, Debug, PartialEq)]
@@ -162,7 +163,7 @@ impl Calibration {
     /// Bayesian information criterion of the fit (Gaussian residuals, noise known up to scale).
     pub fn bic(&self) -> f64 {
         let n = self.n_data.max(1) as f64;
-        n * (self.ssr / n).max(1e-300).ln() + self.n_params as f64 * n.ln()
+        n * portable::ln((self.ssr / n).max(1e-300)) + self.n_params as f64 * portable::ln(n)
     }
 }
 
@@ -186,10 +187,10 @@ pub fn default_params(m: &Machine, opts: &CalibrationOptions) -> Vec<FreeParam> 
     let pos = |param: Param, v: f64| FreeParam {
         param,
         log: true,
-        lo: (v / f).ln(),
-        hi: (v * f).ln(),
-        start: v.ln(),
-        prior: Some((v.ln(), opts.prior_log_sigma)),
+        lo: portable::ln(v / f),
+        hi: portable::ln(v * f),
+        start: portable::ln(v),
+        prior: Some((portable::ln(v), opts.prior_log_sigma)),
     };
     let mut out = Vec::new();
     if opts.thermal {
@@ -244,7 +245,7 @@ pub fn apply(m: &Machine, free: &[FreeParam], x: &[f64]) -> (Machine, Vec<f64>) 
     let mut out = m.clone();
     let mut init = vec![0.0; m.nodes.len()];
     for (fp, &v) in free.iter().zip(x) {
-        let v = if fp.log { v.exp() } else { v };
+        let v = if fp.log { portable::exp(v) } else { v };
         match fp.param {
             Param::Capacity(i) => out.nodes[i].capacity_j_per_k = v,
             Param::AmbientG(i) => out.nodes[i].ambient_w_per_k = v,

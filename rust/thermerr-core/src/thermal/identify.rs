@@ -70,6 +70,7 @@ use crate::error::{Error, Result};
 use crate::fcm::FcmParams;
 use crate::linalg::lstsq_columns;
 use crate::metrics::pearson;
+use crate::portable;
 use crate::run::Run;
 use crate::samples::Samples;
 
@@ -230,7 +231,7 @@ pub struct Identification {
 fn lowpass(t: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
     let mut y = vec![0.0; p.len()];
     for i in 1..p.len() {
-        let a = (-(t[i] - t[i - 1]) / tau).exp();
+        let a = portable::exp(-(t[i] - t[i - 1]) / tau);
         y[i] = a * y[i - 1] + (1.0 - a) * p[i - 1];
     }
     y
@@ -458,19 +459,19 @@ fn best_copy_fit(
             (r, tau, g)
         };
         let (mut lo, mut hi) = (
-            grid[k.saturating_sub(1)].ln(),
-            grid[(k + 1).min(grid.len() - 1)].ln(),
+            portable::ln(grid[k.saturating_sub(1)]),
+            portable::ln(grid[(k + 1).min(grid.len() - 1)]),
         );
         const PHI: f64 = 0.381_966_011_250_105_1;
         for _ in 0..16 {
             let (m1, m2) = (lo + PHI * (hi - lo), hi - PHI * (hi - lo));
-            if at(m1.exp()).0 < at(m2.exp()).0 {
+            if at(portable::exp(m1)).0 < at(portable::exp(m2)).0 {
                 hi = m2;
             } else {
                 lo = m1;
             }
         }
-        let r = at((0.5 * (lo + hi)).exp());
+        let r = at(portable::exp(0.5 * (lo + hi)));
         if r.0 < best.0 {
             best = r;
         }
@@ -484,7 +485,7 @@ type CopyFit = (usize, f64, f64, f64);
 /// The log grid of lags searched for a copy (`COPY_TAU`).
 fn copy_grid() -> Vec<f64> {
     (0..17)
-        .map(|i| COPY_TAU.0 * (COPY_TAU.1 / COPY_TAU.0).powf(i as f64 / 16.0))
+        .map(|i| COPY_TAU.0 * portable::powf(COPY_TAU.1 / COPY_TAU.0, i as f64 / 16.0))
         .collect()
 }
 
@@ -920,7 +921,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     }
     let span = (t[m - 1] - t[0]).max(60.0);
     let grid: Vec<f64> = (0..=30)
-        .map(|i| 60.0 * (86400.0_f64 / 60.0).powf(i as f64 / 30.0))
+        .map(|i| 60.0 * portable::powf(86400.0_f64 / 60.0, i as f64 / 30.0))
         .filter(|&tau| tau <= 2.0 * span)
         .collect();
     let amb_m = &amb[..m];
@@ -1458,7 +1459,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let cal_opts = CalibrationOptions {
         axis: ck.axes[0].clone(),
         bound_factor: 10.0,
-        prior_log_sigma: 10f64.ln(),
+        prior_log_sigma: portable::ln(10f64),
         fit_rows: Some(m),
         max_iter: opts.max_iter,
         ..CalibrationOptions::default()
@@ -1666,11 +1667,11 @@ fn equation_error_start(
             .filter(|s| s.node == names[i])
             .filter_map(|s| {
                 let u = powers.iter().position(|p| p.0 == s.input)?;
-                (c[i][u] > 0.0).then(|| (s.w / c[i][u]).ln())
+                (c[i][u] > 0.0).then(|| portable::ln(s.w / c[i][u]))
             })
             .collect();
         if !logs.is_empty() {
-            cap[i] = Some((logs.iter().sum::<f64>() / logs.len() as f64).exp());
+            cap[i] = Some(portable::exp(logs.iter().sum::<f64>() / logs.len() as f64));
         }
     }
     if cap.iter().all(Option::is_none) {

@@ -10,6 +10,7 @@ use nalgebra::DMatrix;
 
 use super::machine::{Ambient, DriftSpec, Machine};
 use crate::error::{Error, Result};
+use crate::portable;
 use crate::run::Run;
 
 /// Named columns of a run, borrowed.
@@ -392,7 +393,7 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         for (k, &uk) in u.iter().enumerate().take(n_t) {
             if uk > 0.0 {
                 if uk.to_bits() != last.0.to_bits() {
-                    last = (uk, w * (uk / r).powf(e));
+                    last = (uk, w * portable::powf(uk / r, e));
                 }
                 drv[k * nv + v] = last.1;
             }
@@ -710,14 +711,24 @@ pub fn drift_terms(
         let u = run.col(&term.input)?;
         let f = |v: f64| {
             if v > 0.0 {
-                (v / term.reference).powf(term.exponent)
+                portable::powf(v / term.reference, term.exponent)
             } else {
                 0.0
             }
         };
         let u0 = f(u[0]);
-        out.instant
-            .push((term.um, u.iter().map(|v| f(*v) - u0).collect()));
+        // the power for the last input value (stepped inputs repeat it for hours)
+        let mut last = (u[0], u0);
+        let series = u
+            .iter()
+            .map(|&v| {
+                if v.to_bits() != last.0.to_bits() {
+                    last = (v, f(v));
+                }
+                last.1 - u0
+            })
+            .collect();
+        out.instant.push((term.um, series));
         out.labels_instant.push(format!("inputs.{}", term.input));
     }
     Ok(out)
@@ -728,14 +739,20 @@ pub fn lag(t: &[f64], y: &[f64], tau: f64) -> Vec<f64> {
     let mut z = Vec::with_capacity(y.len());
     let Some(&first) = y.first() else { return z };
     z.push(first);
+    // (step, a, w) of the last step: a logger's steps repeat, and exp is the loop's cost
+    let mut last = (f64::NAN, 0.0, 0.0);
     for k in 1..y.len() {
         let h = t[k] - t[k - 1];
-        let a = (-h / tau).exp();
-        let w = if h > 0.0 {
-            1.0 - (tau / h) * (1.0 - a)
-        } else {
-            1.0
-        };
+        if h.to_bits() != last.0.to_bits() {
+            let a = portable::exp(-h / tau);
+            let w = if h > 0.0 {
+                1.0 - (tau / h) * (1.0 - a)
+            } else {
+                1.0
+            };
+            last = (h, a, w);
+        }
+        let (_, a, w) = last;
         let prev = z[k - 1];
         z.push(a * prev + (1.0 - a) * y[k - 1] + w * (y[k] - y[k - 1]));
     }

@@ -4,6 +4,7 @@ use super::cause::Cause;
 use super::score::{self, HeldOut};
 use super::{Candidate, Fit, Holdout};
 use crate::error::Result;
+use crate::portable;
 use crate::thermal::calibrate::{
     apply, calibrate, default_params, Calibration, CalibrationOptions, FreeParam, Param,
 };
@@ -38,9 +39,9 @@ fn log_param(param: Param, lo: f64, hi: f64, start: f64) -> FreeParam {
     FreeParam {
         param,
         log: true,
-        lo: lo.ln(),
-        hi: hi.ln(),
-        start: start.ln(),
+        lo: portable::ln(lo),
+        hi: portable::ln(hi),
+        start: portable::ln(start),
         prior: None,
     }
 }
@@ -284,7 +285,7 @@ fn warm_start(mut free: Vec<FreeParam>, base: &Calibration) -> Vec<FreeParam> {
             _ => None,
         };
         if let Some(v) = v {
-            fp.start = if fp.log { v.ln() } else { v };
+            fp.start = if fp.log { portable::ln(v) } else { v };
         }
     }
     free
@@ -625,7 +626,11 @@ fn carried(fp: &FreeParam, target: &Machine, from: &Machine) -> Option<f64> {
         }
         _ => None,
     }?;
-    let v = if fp.log { v.max(1e-300).ln() } else { v };
+    let v = if fp.log {
+        portable::ln(v.max(1e-300))
+    } else {
+        v
+    };
     v.is_finite().then(|| v.clamp(fp.lo, fp.hi))
 }
 
@@ -715,7 +720,7 @@ um_per_k = { a = 1.0, b = 2.0 }
         let t: Vec<f64> = (0..n).map(|k| 900.0 * k as f64).collect();
         let part: Vec<f64> = t
             .iter()
-            .map(|s| 20.0 + 20.0 * (1.0 - (-s / 20_000.0).exp()))
+            .map(|s| 20.0 + 20.0 * (1.0 - portable::exp(-s / 20_000.0)))
             .collect();
         let with = |drift_k_per_h: f64| -> Run {
             let ta: Vec<f64> = part
@@ -825,7 +830,7 @@ um_per_k = { a = 1.0, b = 2.0 }
         fitted.nodes[0].sensor_drift_k_per_h = 0.2;
         let carried = carry(&red.extra, &red.machine, &fitted);
         assert_eq!(carried[0].start, 0.2);
-        assert!((carried[1].start - 7.5f64.ln()).abs() < 1e-12);
+        assert!((carried[1].start - portable::ln(7.5f64)).abs() < 1e-12);
         assert_eq!(parameters(&s1, &fitted, 0)["w_per_k"], 0.5);
         assert_eq!(parameters(&s3, &fitted, 0)["w_per_k"], 7.5);
         // the same cause on the same column is not tried again, on another column it is

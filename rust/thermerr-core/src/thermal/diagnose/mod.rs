@@ -50,6 +50,7 @@ use super::machine::{Identified, Machine};
 use super::sim::RunView;
 use crate::error::{Error, Result};
 use crate::guard::{suspect_readings, Suspect};
+use crate::portable;
 use crate::progress::{self, Progress};
 use candidates::{Baseline, Spec};
 use score::HeldOut;
@@ -257,7 +258,7 @@ impl StartCheck {
 
 /// The free parameters of a recalibration started [`SECOND_START_FACTOR`] off the file's values.
 fn second_start(m: &Machine, copts: &CalibrationOptions) -> Vec<FreeParam> {
-    let shift = SECOND_START_FACTOR.ln();
+    let shift = portable::ln(SECOND_START_FACTOR);
     let mut up = true;
     let mut free = default_params(m, copts);
     for f in free.iter_mut().filter(|f| f.log) {
@@ -1023,7 +1024,7 @@ pub(crate) mod tests {
             .iter()
             .zip(&second)
             .filter(|(f, _)| f.log)
-            .map(|(f, s)| ((s.start - f.start) / SECOND_START_FACTOR.ln()).round())
+            .map(|(f, s)| ((s.start - f.start) / portable::ln(SECOND_START_FACTOR)).round())
             .collect();
         // capacity a up, its room conductance down, then b, then the link
         assert_eq!(shifts, vec![1.0, -1.0, 1.0, -1.0, 1.0]);
