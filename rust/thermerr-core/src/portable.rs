@@ -1,4 +1,4 @@
-//! exp, ln and pow whose bits do not depend on the machine.
+//! exp, ln, log₂, log₁₀ and pow whose bits do not depend on the machine.
 //!
 //! `f64::exp` and friends call the C library, and glibc picks its kernels by the CPU (an FMA
 //! variant where the CPU has FMA, which rounds some results differently) and has changed them
@@ -18,6 +18,18 @@ pub fn exp(x: f64) -> f64 {
 #[inline]
 pub fn ln(x: f64) -> f64 {
     libm::log(x)
+}
+
+/// log₂ x
+#[inline]
+pub fn log2(x: f64) -> f64 {
+    libm::log2(x)
+}
+
+/// log₁₀ x
+#[inline]
+pub fn log10(x: f64) -> f64 {
+    libm::log10(x)
 }
 
 /// xʸ
@@ -47,6 +59,10 @@ mod tests {
         }
         assert_eq!(exp(0.0), 1.0);
         assert_eq!(ln(1.0), 0.0);
+        for k in -30..30 {
+            assert_eq!(log2(2f64.powi(k)), k as f64);
+        }
+        assert_eq!(log10(1000.0), 3.0);
         assert!(ln(-1.0).is_nan());
     }
 }

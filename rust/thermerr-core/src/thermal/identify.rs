@@ -599,7 +599,7 @@ fn sig4(v: f64) -> f64 {
     if v == 0.0 || !v.is_finite() {
         return v;
     }
-    let e = v.abs().log10().floor() as i32;
+    let e = portable::log10(v.abs()).floor() as i32;
     let s = 10f64.powi(3 - e);
     (v * s).round() / s
 }

@@ -258,7 +258,7 @@ impl Ticks {
             1.0
         };
         let e = if mean.is_finite() && mean > 0.0 {
-            (mean / 1024.0).log2().floor().clamp(-40.0, 40.0)
+            portable::log2(mean / 1024.0).floor().clamp(-40.0, 40.0)
         } else {
             0.0
         };
@@ -460,7 +460,7 @@ impl Transition {
     fn of(m: &[f64], n: usize, h: f64) -> Transition {
         let norm = m.iter().fold(0.0_f64, |a, v| a.max(v.abs())) * n as f64 * h.abs();
         let s = if norm > 0.5 {
-            (norm / 0.5).log2().ceil() as i32
+            portable::log2(norm / 0.5).ceil() as i32
         } else {
             0
         };
