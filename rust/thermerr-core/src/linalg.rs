@@ -74,6 +74,11 @@ pub fn lstsq_columns(cols: &[&[f64]], b: &[f64]) -> Result<Vec<f64>> {
     if m == 0 || n == 0 {
         return Err(Error::Shape("least squares on an empty system".into()));
     }
+    if !all_finite(b) || !cols.iter().all(|c| all_finite(c)) {
+        return Err(Error::Numerical(
+            "least squares on a system with non-finite values".into(),
+        ));
+    }
     let a = nalgebra::DMatrix::from_fn(m, n, |i, j| cols[j][i]);
     let rhs = nalgebra::DVector::from_column_slice(b);
     let tol = f64::EPSILON * m.max(n) as f64;
@@ -95,7 +100,10 @@ pub fn lstsq_columns(cols: &[&[f64]], b: &[f64]) -> Result<Vec<f64>> {
             return finite(x.iter().copied().collect(), "least squares");
         }
     }
-    let svd = a.svd(true, true);
+    // a bounded number of sweeps: nalgebra's `svd` would loop until convergence
+    let svd = a
+        .try_svd(true, true, f64::EPSILON, 10_000)
+        .ok_or_else(|| Error::Numerical("SVD did not converge".into()))?;
     let smax = svd.singular_values.max();
     if smax == 0.0 {
         return Err(Error::Numerical(
@@ -502,6 +510,9 @@ mod tests {
         assert_relative_eq!(x[0], 1.0, epsilon = 1e-10);
         assert_relative_eq!(x[1], 1.0, epsilon = 1e-10);
         assert!(lstsq_columns(&[&c[..3]], &b).is_err());
+        let nan = [1.0, f64::NAN, 2.0, 3.0];
+        assert!(lstsq_columns(&[&nan[..]], &b).is_err());
+        assert!(lstsq_columns(&[&c[..]], &nan).is_err());
         assert!(lstsq_columns(&[&[0.0; 4][..]], &[0.0; 4]).is_err());
     }
 
