@@ -148,27 +148,28 @@ where
     while iter < opts.max_iter {
         iter += 1;
         crate::interrupt::check()?;
-        // forward-difference Jacobian in θ, columns in parallel
-        let cols: Vec<Result<Vec<f64>>> = (0..n)
-            .into_par_iter()
-            .map(|j| {
+        // forward-difference Jacobian in θ, columns in parallel, each written in place (a
+        // non-finite difference counts as no influence); the first failing column's error wins
+        let done: Vec<Result<()>> = jac
+            .par_chunks_mut(m)
+            .enumerate()
+            .map(|(j, col)| {
                 let h = opts.diff_step * (1.0 + theta[j].abs());
                 let mut t = theta.clone();
                 t[j] += h;
                 let rj = f(&to_p(&t, lo, hi))?;
-                Ok(rj.iter().zip(&r).map(|(a, b)| (a - b) / h).collect())
+                if rj.len() != m {
+                    return Err(Error::Shape("the residual vector changed length".into()));
+                }
+                for ((d, a), b) in col.iter_mut().zip(&rj).zip(&r) {
+                    let v = (a - b) / h;
+                    *d = if v.is_finite() { v } else { 0.0 };
+                }
+                Ok(())
             })
             .collect();
         n_eval += n;
-        for (j, c) in cols.into_iter().enumerate() {
-            let c = c?;
-            if c.len() != m {
-                return Err(Error::Shape("the residual vector changed length".into()));
-            }
-            for (d, v) in jac[j * m..(j + 1) * m].iter_mut().zip(&c) {
-                *d = if v.is_finite() { *v } else { 0.0 };
-            }
-        }
+        done.into_iter().collect::<Result<()>>()?;
         // JᵀJ and Jᵀr in a fixed order of operations: the same steps on every CPU
         let cols: Vec<&[f64]> = jac.chunks_exact(m).collect();
         let jtj = gram(&cols, m)?;
