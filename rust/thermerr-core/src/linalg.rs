@@ -337,14 +337,13 @@ pub fn lstsq_with_prior(
     }
     let w = 1.0 / (sigma * sigma);
     let dot = |a: &[f64], b: &[f64]| dot(&a[..rows], &b[..rows]);
-    let mut gram = vec![0.0; nb * nb];
-    for i in 0..nb {
-        for j in 0..=i {
-            let g = w * dot(cols[i], cols[j]);
-            gram[i * nb + j] = g;
-            gram[j * nb + i] = g;
-        }
-        gram[i * nb + i] += 1.0 / (prior[i].1 * prior[i].1);
+    // w·CᵀC plus the prior's precision on the diagonal (each entry `dot`'s bits, as before)
+    let mut gram = gram(cols, rows)?;
+    for g in gram.iter_mut() {
+        *g *= w;
+    }
+    for (i, p) in prior.iter().enumerate() {
+        gram[i * nb + i] += 1.0 / (p.1 * p.1);
     }
     let chol = Cholesky::new(&gram, nb).ok_or_else(|| {
         Error::Numerical(
