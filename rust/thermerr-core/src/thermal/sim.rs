@@ -413,15 +413,15 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         q: ticks.q,
     };
     match nd {
-        1 => march.run::<1>(&mut x, &mut out)?,
-        2 => march.run::<2>(&mut x, &mut out)?,
-        3 => march.run::<3>(&mut x, &mut out)?,
-        4 => march.run::<4>(&mut x, &mut out)?,
-        5 => march.run::<5>(&mut x, &mut out)?,
-        6 => march.run::<6>(&mut x, &mut out)?,
-        7 => march.run::<7>(&mut x, &mut out)?,
-        8 => march.run::<8>(&mut x, &mut out)?,
-        _ => march.run::<0>(&mut x, &mut out)?,
+        1 => march.run_n::<1>(&mut x, &mut out)?,
+        2 => march.run_n::<2>(&mut x, &mut out)?,
+        3 => march.run_n::<3>(&mut x, &mut out)?,
+        4 => march.run_n::<4>(&mut x, &mut out)?,
+        5 => march.run_n::<5>(&mut x, &mut out)?,
+        6 => march.run_n::<6>(&mut x, &mut out)?,
+        7 => march.run_n::<7>(&mut x, &mut out)?,
+        8 => march.run_n::<8>(&mut x, &mut out)?,
+        _ => march.run_n::<0>(&mut x, &mut out)?,
     }
     if !crate::linalg::all_finite(&out) {
         return Err(Error::Numerical(
@@ -524,38 +524,61 @@ struct March<'s> {
 }
 
 impl March<'_> {
-    /// Fills `out` (n_t × nn) from the start `x`. `N`: the number of simulated nodes when it is
-    /// small (the loops then unroll), 0 for any other.
-    fn run<const N: usize>(&mut self, x: &mut [f64], out: &mut [f64]) -> Result<()> {
+    /// [`March::run`] for `N` nodes and the run's number of drivers.
+    fn run_n<const N: usize>(&mut self, x: &mut [f64], out: &mut [f64]) -> Result<()> {
+        match self.nv {
+            1 => self.run::<N, 1>(x, out),
+            2 => self.run::<N, 2>(x, out),
+            3 => self.run::<N, 3>(x, out),
+            4 => self.run::<N, 4>(x, out),
+            _ => self.run::<N, 0>(x, out),
+        }
+    }
+
+    /// Fills `out` (n_t × nn) from the start `x`. `N`: the number of simulated nodes, `V`: the
+    /// number of drivers, when they are small (the loops then unroll and the state stays in
+    /// registers), 0 for any other. The same operations in the same order for every `N`, `V`.
+    fn run<const N: usize, const V: usize>(
+        &mut self,
+        x: &mut [f64],
+        out: &mut [f64],
+    ) -> Result<()> {
         let nd = if N > 0 { N } else { self.nd };
-        let (nv, nn) = (self.nv, self.nn);
+        let nv = if V > 0 { V } else { self.nv };
+        let nn = self.nn;
         let n_t = out.len() / nn;
         let mut phi = vec![0.0; nd * nd];
         let mut w = vec![0.0; nd * nv];
-        // the next state on the stack for a small network (the loop below then keeps it in
-        // registers: about 1.5 times faster than a heap buffer, the same operations in the same
-        // order), on the heap for a large one
-        let mut small = [0.0; 8];
-        let mut big = if nd > small.len() {
-            vec![0.0; nd]
+        // the state and the next state on the stack for a small network (the loop below then
+        // keeps them in registers), on the heap for a large one
+        let mut small = [[0.0; 8]; 2];
+        let mut big = if nd > small[0].len() {
+            vec![vec![0.0; nd]; 2]
         } else {
             Vec::new()
         };
-        let xn: &mut [f64] = if nd <= small.len() {
-            &mut small[..nd]
+        let (xs, xn): (&mut [f64], &mut [f64]) = if nd <= small[0].len() {
+            let [a, b] = &mut small;
+            (&mut a[..nd], &mut b[..nd])
         } else {
-            &mut big[..]
+            let (a, b) = big.split_at_mut(1);
+            (&mut a[0][..], &mut b[0][..])
         };
+        xs.copy_from_slice(&x[..nd]);
+        let bnd: Vec<(usize, &[f64])> = self
+            .bnd
+            .iter()
+            .enumerate()
+            .filter_map(|(i, b)| b.map(|c| (i, c)))
+            .collect();
         let mut cur_steps: Option<i64> = None;
         for k in 0..n_t {
             let row = &mut out[k * nn..(k + 1) * nn];
-            for (p, &i) in self.dyn_nodes.iter().enumerate() {
-                row[i] = x[p];
+            for (&i, &v) in self.dyn_nodes.iter().zip(xs.iter()) {
+                row[i] = v;
             }
-            for (i, b) in self.bnd.iter().enumerate() {
-                if let Some(col) = b {
-                    row[i] = col[k];
-                }
+            for &(i, col) in &bnd {
+                row[i] = col[k];
             }
             if k + 1 == n_t {
                 break;
@@ -573,16 +596,17 @@ impl March<'_> {
                 let pr = &phi[p * nd..(p + 1) * nd];
                 let mut acc = 0.0;
                 for q in 0..nd {
-                    acc += pr[q] * x[q];
+                    acc += pr[q] * xs[q];
                 }
                 let wr = &w[p * nv..(p + 1) * nv];
-                for (wv, dv) in wr.iter().zip(d) {
-                    acc += wv * dv;
+                for v in 0..nv {
+                    acc += wr[v] * d[v];
                 }
                 xn[p] = acc;
             }
-            x[..nd].copy_from_slice(xn);
+            xs.copy_from_slice(xn);
         }
+        x[..nd].copy_from_slice(xs);
         Ok(())
     }
 
