@@ -12,7 +12,8 @@ use std::collections::BTreeMap;
 
 use super::machine::{Machine, NodeSpec};
 use super::sim::{
-    drift_terms, finish, lag, median_step, simulate_nodes, Init, RunView, Simulation, Thinned,
+    drift_terms, finish, lag, median_step, simulate_nodes, simulate_nodes_on, Init, RunView,
+    Simulation, Steps, Thinned,
 };
 use crate::error::{Error, Result};
 use crate::linalg::{lstsq_columns, lstsq_with_prior};
@@ -404,8 +405,9 @@ fn residuals(
     sigma_t: f64,
     sigma_e: f64,
     fit_error: bool,
+    steps: &Steps,
 ) -> Result<Vec<f64>> {
-    let temps = simulate_nodes(m, run, &Init::Offsets(init.to_vec()))?;
+    let temps = simulate_nodes_on(m, run, &Init::Offsets(init.to_vec()), steps)?;
     let e = match fit_error {
         true => fit_drift(m, tg.axis_index, run, &temps, tg.measured_e, rows, sigma_e)?.1,
         false => Vec::new(),
@@ -531,9 +533,20 @@ fn calibrate_all_rows(
             + d.columns.len()
             + d.inputs.len()
     };
+    let steps = Steps::of(run.time);
     let residual = |x: &[f64]| -> Result<Vec<f64>> {
         let (mm, init) = apply(m, &free, x);
-        let mut r = residuals(&mm, &init, run, &tg, rows, sigma_t, sigma_e, opts.fit_error)?;
+        let mut r = residuals(
+            &mm,
+            &init,
+            run,
+            &tg,
+            rows,
+            sigma_t,
+            sigma_e,
+            opts.fit_error,
+            &steps,
+        )?;
         for (fp, v) in free.iter().zip(x) {
             if let Some((c, w)) = fp.prior {
                 r.push((v - c) / w);

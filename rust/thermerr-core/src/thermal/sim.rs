@@ -278,13 +278,56 @@ pub fn simulate(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<Simula
     finish(mach, run, temps)
 }
 
+/// A run's time axis on its tick grid: what every simulation over the run shares (a search
+/// simulates the same rows thousands of times).
+pub struct Steps {
+    q: f64,
+    /// each step in ticks (the times are rounded, not the steps)
+    dt: Vec<i64>,
+    /// the distinct step lengths, ascending
+    distinct: Vec<i64>,
+}
+
+impl Steps {
+    pub fn of(t: &[f64]) -> Steps {
+        let ticks = Ticks::new(t);
+        let at: Vec<i64> = t.iter().map(|&v| ticks.at(v)).collect();
+        let dt: Vec<i64> = at.windows(2).map(|w| w[1] - w[0]).collect();
+        let mut distinct = dt.clone();
+        distinct.dedup(); // a logger's steps repeat: the sort below sees a handful of values
+        distinct.sort_unstable();
+        distinct.dedup();
+        Steps {
+            q: ticks.q,
+            dt,
+            distinct,
+        }
+    }
+}
+
 /// Node temperatures only (n_steps × n_nodes, row-major), boundary nodes included.
 pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<Vec<f64>> {
+    simulate_nodes_on(mach, run, init, &Steps::of(run.time))
+}
+
+/// [`simulate_nodes`] with the run's [`Steps`] computed once by the caller.
+pub fn simulate_nodes_on(
+    mach: &Machine,
+    run: &RunView<'_>,
+    init: &Init,
+    steps: &Steps,
+) -> Result<Vec<f64>> {
     let n_t = run.len();
     if n_t == 0 {
         return Err(Error::Shape("cannot simulate an empty run".into()));
     }
-    let t = run.time;
+    if steps.dt.len() + 1 != n_t {
+        return Err(Error::Shape(format!(
+            "{}: the steps were computed for {} rows, the run has {n_t}",
+            run.source,
+            steps.dt.len() + 1
+        )));
+    }
     let nn = mach.nodes.len();
     let net = network(mach);
     let nd = net.dyn_nodes.len();
@@ -319,12 +362,7 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         x.push(v);
     }
     let mut out = vec![0.0; n_t * nn];
-    let ticks = Ticks::new(t);
-    // each step in ticks (the times are rounded, not the steps: see Ticks)
-    let dt: Vec<i64> = {
-        let at: Vec<i64> = t.iter().map(|&v| ticks.at(v)).collect();
-        at.windows(2).map(|w| w[1] - w[0]).collect()
-    };
+    let dt = &steps.dt;
     let mflat: Vec<f64> = (0..nd * nd).map(|i| net.m[(i / nd, i % nd)]).collect();
     let mut cache: HashMap<i64, Transition> = HashMap::new();
     {
@@ -332,14 +370,11 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         // ticks is one of m ticks followed by one of one tick, so one transition for the
         // shortest step and one for the tick, then a small product per tick up to the longest,
         // instead of one series each
-        let mut steps = dt.clone();
-        steps.dedup(); // a logger's steps repeat: the sort below sees a handful of values
-        steps.sort_unstable();
-        steps.dedup();
+        let (steps, q) = (&steps.distinct, steps.q);
         if let (Some(&lo), Some(&hi)) = (steps.first(), steps.last()) {
             if steps.len() > 2 && steps.len() <= MAX_STEP_LENGTHS && hi - lo <= CHAIN_SPAN {
-                let eq = Transition::of(&mflat, nd, ticks.q);
-                let mut e = Transition::of(&mflat, nd, lo as f64 * ticks.q);
+                let eq = Transition::of(&mflat, nd, q);
+                let mut e = Transition::of(&mflat, nd, lo as f64 * q);
                 let mut want = steps.iter().peekable();
                 for m in lo..=hi {
                     if m < hi {
@@ -407,10 +442,10 @@ pub fn simulate_nodes(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<
         bnd: &bnd,
         b_in: &b_in,
         drv: &drv,
-        dt: &dt,
+        dt,
         cache,
         m: &mflat,
-        q: ticks.q,
+        q: steps.q,
     };
     match nd {
         1 => march.run_n::<1>(&mut x, &mut out)?,
