@@ -246,3 +246,27 @@ def test_suspect_readings_are_said_not_changed(tmp_path, capsys):
     # the clean run: nothing suspect
     d = diagnose(tr.Run.from_frame(clean, source="clean"), Machine.from_toml(c.nominal_toml()), progress=False)
     assert d.report["suspect_readings"] == [] and "warning:" not in str(d)
+
+
+def test_a_failing_column_is_not_tried_as_a_heat_source():
+    """A spare thermocouple that opens in the training rows (-200 °C from then on) is said as a
+    suspect reading and not tried as an unmodelled source (its fault would be fitted as heat and
+    take the place of a real column among the few tried): the diagnosis is the one of the run
+    without it, to the bit. On the real 46-h run with a spare column set to -200 from row 3000
+    (a failure made for the check), that column took a place among the four columns tried and
+    the unmodelled source from `T_t5` on `E_ch4` went unnamed."""
+    from thermerr_rs.errors import SuspectReadingWarning
+
+    c = syn.make_case("vmc", "unmodeled_source", 1, hours=(8.0, 4.0), dt=120.0)
+    m = Machine.from_toml(c.nominal_toml())
+    clean = diagnose(tr.Run.from_frame(c.train), m, tr.Run.from_frame(c.test), progress=False)
+    dead = np.array(c.train["T_hydraulic"], dtype=float) + 1.0
+    dead[len(dead) // 3:] = -200.0
+    train = dict(c.train, T_dead=dead)
+    test = dict(c.test, T_dead=np.full(len(c.test["time_s"]), -200.0))
+    with pytest.warns(SuspectReadingWarning, match="T_dead jumps"):
+        d = diagnose(tr.Run.from_frame(train), m, tr.Run.from_frame(test), progress=False)
+    assert "T_dead" not in {x.get("column") for x in d.report["candidates"]}
+    assert d.verdict == clean.verdict == "unmodeled_source" and d.column == clean.column == "T_hydraulic"
+    assert d.report["candidates"] == clean.report["candidates"]
+    assert np.array_equal(d.series["extended"], clean.series["extended"])

@@ -357,3 +357,30 @@ def test_a_full_fit_never_ends_worse_than_the_screen_it_nests():
             if x["fit"] == "full" and x["cause"] == "unmodeled_source" and x["column"] == "T_hydraulic"]
     assert full, [(x["cause"], x.get("column"), x["fit"]) for x in d.report["candidates"]]
     assert all(x["delta_bic"] < 0 for x in full), [(x.get("node"), x["delta_bic"]) for x in full]
+
+
+def test_a_sensor_that_fails_is_neither_the_room_nor_a_node():
+    """A thermocouple that opens a quarter of the way into the run and reads its rail value
+    (-200 °C) from then on is the coldest reading of the run: before, identification took it for
+    the room and built every node's balance on it. Now a temperature the run shows failing (a
+    jump, guard's ``Suspect.fails``) is left out as a spare column, saying why, and the network
+    is the one identified without it; given as the ambient, it is used all the same."""
+    c = syn.make_case("vmc", "none", 1, hours=HOURS, dt=DT_S)
+    cols = {("T_room" if k == "T_ambient" else k): np.array(v, dtype=float) for k, v in c.train.items()}
+    plain, s0 = Machine.identify(_run(cols, "plain.csv"))
+    dead = cols["T_cabinet"].copy()
+    at = len(dead) // 4
+    dead[at:] = -200.0
+    broken = dict(cols, T_dead=dead)
+    with pytest.warns(SuspectReadingWarning, match="T_dead jumps by up to"):
+        m, s = Machine.identify(_run(broken, "broken.csv"))
+    assert s0["ambient"]["column"] == "T_room"
+    assert s["ambient"]["column"] == "T_room", s["ambient"]
+    assert "T_dead" not in m.sensors and m.sensors == plain.sensors
+    left = {x.split(":")[0]: x for x in s["spare"]}
+    assert f"first at row {at + 1}" in left["T_dead"] and "a sensor fault" in left["T_dead"]
+    assert s["axes"][0]["holdout_rmse_um"] == pytest.approx(s0["axes"][0]["holdout_rmse_um"], rel=1e-9)
+    # the user's word stands: given as the ambient, the failing column is the ambient
+    with pytest.warns(SuspectReadingWarning):
+        _, s2 = Machine.identify(_run(broken, "broken.csv"), ambient="T_dead")
+    assert s2["ambient"]["column"] == "T_dead" and "T_dead" not in {x.split(":")[0] for x in s2["spare"]}

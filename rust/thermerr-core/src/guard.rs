@@ -683,6 +683,17 @@ pub struct Suspect {
     pub text: String,
 }
 
+impl Suspect {
+    /// Whether it shows the column failing: a jump (a step far faster than the column ever
+    /// moves otherwise, and [`JUMP_FLOOR`] or more per step: an open thermocouple falling to its
+    /// rail value, a loose cable). A repeat is not: a logger's coarse resolution on a steady
+    /// temperature gives one too. Identification takes a failing temperature for neither the
+    /// room nor a node's sensor, and the diagnosis does not try it as a heat source.
+    pub fn fails(&self) -> bool {
+        self.kind == SuspectKind::Jump
+    }
+}
+
 /// The suspect readings of `cols` (named `names`, one value per row of `time`, finite), from
 /// the run `source`: per column, its jumps and its longest exact repeat if
 /// [`STUCK_FLOOR_S`] or longer. Nothing is changed: the caller reports them.

@@ -4,7 +4,9 @@
 //! 1. **Ambient.** The column given, else `T_ambient`, else the temperature that is the coldest
 //!    reading of the run in the most training samples: heat flows from the machine into the room,
 //!    so the room is the coldest place a run measures (a sensor that drifts downwards can fool
-//!    this; the reason names the share and the runner-up so a person can check).
+//!    this; the reason names the share and the runner-up so a person can check). A temperature
+//!    the run shows failing ([`crate::guard::Suspect::fails`]: an open thermocouple at its rail
+//!    value is the coldest reading of all) is neither the room nor a node's sensor, unless given.
 //! 2. **Nodes.** The other temperatures' rises over the ambient on the training rows, each
 //!    divided by its largest magnitude (a shape, not a size), are clustered by fuzzy c-means
 //!    (m = 2, fixed seed). The count is the one given, else the one of 2..=5 (at most the sensor
@@ -794,6 +796,40 @@ fn choose_ambient(
     })
 }
 
+/// The temperatures the run shows failing ([`Suspect::fails`](crate::guard::Suspect::fails)):
+/// taken for neither the room nor a node's sensor (a dead sensor read as the coldest place would
+/// be chosen as the room, and every node's balance built on it). `given` (the ambient the user
+/// named) is kept whatever it shows; so are all the columns when fewer than two others would be
+/// left. Returns (column, the spare-column line saying why).
+fn failed_columns(
+    suspects: &[crate::guard::Suspect],
+    temps: &[&str],
+    given: Option<&str>,
+) -> Vec<(String, String)> {
+    let failed: Vec<(String, String)> = suspects
+        .iter()
+        .filter(|sp| sp.fails())
+        .filter(|sp| temps.contains(&sp.column.as_str()) && Some(sp.column.as_str()) != given)
+        .map(|sp| {
+            (
+                sp.column.clone(),
+                format!(
+                    "{}: jumps by up to {:.3} K from one reading to the next ({} time{}, first at row {}): a sensor fault, so neither the room nor a node's sensor, left out of the network (a spare column); drop or mend those rows to use it",
+                    sp.column,
+                    sp.size,
+                    sp.count,
+                    if sp.count == 1 { "" } else { "s" },
+                    sp.row
+                ),
+            )
+        })
+        .collect();
+    if temps.len().saturating_sub(failed.len()) < 2 {
+        return Vec::new();
+    }
+    failed
+}
+
 /// Fuzzy c-means on the rows of `x` (n × d); returns labels, the membership of each object in
 /// its own cluster, and the Xie–Beni index.
 fn cluster(
@@ -871,12 +907,20 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     for sp in &suspect_readings {
         notes.push(format!("suspect reading: {}", sp.text));
     }
+    // a temperature that jumps (an open thermocouple, a loose cable) is no room and no node's
+    // sensor: left out unless given as the ambient, or unless too few others are left
+    let failed = failed_columns(&suspect_readings, &ck.temps, opts.ambient.as_deref());
+    let temps: Vec<&str> = ck
+        .temps
+        .iter()
+        .copied()
+        .filter(|c| !failed.iter().any(|(f, _)| f == c))
+        .collect();
 
     // 1. ambient
-    let ambient = choose_ambient(run, &ck.temps, m, opts.ambient.as_deref())?;
+    let ambient = choose_ambient(run, &temps, m, opts.ambient.as_deref())?;
     let amb = view.col(&ambient.column)?;
-    let sensors: Vec<&str> = ck
-        .temps
+    let sensors: Vec<&str> = temps
         .iter()
         .copied()
         .filter(|c| *c != ambient.column)
@@ -998,6 +1042,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         spare.clear();
         outside.clear();
     }
+    spare.extend(failed.iter().map(|(_, why)| why.clone()));
     let sensors: Vec<&str> = kept.iter().map(|&s| sensors[s]).collect();
     let rises: Vec<Vec<f64>> = kept.iter().map(|&s| rises[s].clone()).collect();
 

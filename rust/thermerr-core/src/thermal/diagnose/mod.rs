@@ -575,6 +575,8 @@ struct RoundInput<'r, 'a> {
     split: usize,
     axis: &'r str,
     progress: Option<&'r Progress>,
+    /// `T_*` columns the runs show failing ([`Suspect::fails`]): not tried as heat sources
+    failed: &'r [String],
 }
 
 /// One round's candidates, fitted and sorted by score (best first), and the unused `T_*`
@@ -591,7 +593,8 @@ fn round_candidates(
 ) -> Result<(Vec<Candidate>, Vec<String>)> {
     let (train, split, axis, axis_index) = (cx.train, cx.split, cx.axis, base.axis_index);
     let current = base.calibration;
-    let free = candidates::free_columns(mk, train);
+    let mut free = candidates::free_columns(mk, train);
+    free.retain(|c| !cx.failed.contains(c));
     let ranked = if free.len() > MAX_SOURCE_COLUMNS {
         let tg = targets(&current.machine, train, axis)?;
         let (_, sim, _) = evaluate(
@@ -769,12 +772,19 @@ fn diagnose_on(
     );
     // extensions are built on the nominal machine, so that bounds and priors are the baseline's
     // (centred on the user's estimate); the search starts from the calibrated values
+    let suspect_readings = suspects(train, hold, &axis);
+    let failed: Vec<String> = suspect_readings
+        .iter()
+        .filter(|sp| sp.fails() && sp.column.starts_with("T_"))
+        .map(|sp| sp.column.clone())
+        .collect();
     let cx = RoundInput {
         train,
         held: &held,
         split,
         axis: &axis,
         progress: pg,
+        failed: &failed,
     };
     stage_s.insert("baseline", clock.elapsed().as_secs_f64());
     let (cands, untried_columns) = round_candidates(&cx, m, &base, &[], &[])?;
@@ -858,7 +868,6 @@ fn diagnose_on(
             train.col(&axis)?[split..].to_vec(),
         ),
     };
-    let suspect_readings = suspects(train, hold, &axis);
     Ok(Diagnosis {
         column,
         axis,
