@@ -270,3 +270,29 @@ def test_a_failing_column_is_not_tried_as_a_heat_source():
     assert d.verdict == clean.verdict == "unmodeled_source" and d.column == clean.column == "T_hydraulic"
     assert d.report["candidates"] == clean.report["candidates"]
     assert np.array_equal(d.series["extended"], clean.series["extended"])
+
+
+def test_a_gap_in_the_log_is_said(tmp_path, capsys):
+    """The logger off for an hour in the training rows: the command line, report.json and the
+    Python warning say where (the row after the gap) and how long, as the time axis's suspect
+    reading (kind ``gap``); the model holds the inputs across it, so a user learns why the
+    residual may misbehave there. A run without a gap gets none (test above)."""
+    from thermerr_rs.errors import SuspectReadingWarning
+
+    c = syn.make_case("vmc", "none", 3, hours=(8.0, 4.0), dt=120.0)
+    keep = np.ones(len(c.train["time_s"]), dtype=bool)
+    keep[100:130] = False  # 30 readings of 120 s missing: a gap of 3720 s before row 101
+    train = {k: np.asarray(v)[keep] for k, v in c.train.items()}
+    run, nominal = tmp_path / "gap.csv", tmp_path / "nominal.toml"
+    syn.write_run_csv(run, train)
+    nominal.write_text(c.nominal_toml())
+    out = tmp_path / "report"
+    assert main(["diagnose", str(run), "--machine", str(nominal), "--out", str(out)]) == 0
+    lines = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("warning: ")]
+    assert len(lines) == 1 and "the log has 1 gap of 1200 s or more" in lines[0], lines
+    assert "the first before row 101, the longest 3720 s" in lines[0]
+    rep = json.loads((out / "report.json").read_text())
+    assert [(s["column"], s["kind"], s["row"], s["count"], s["size"]) for s in rep["suspect_readings"]] == [
+        ("time_s", "gap", 101, 1, 3720.0)]
+    with pytest.warns(SuspectReadingWarning, match="the log has 1 gap"):
+        Machine.identify(tr.read_run(run))

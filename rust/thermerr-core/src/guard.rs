@@ -654,6 +654,12 @@ pub const JUMP_FACTOR: f64 = 20.0;
 /// whose 99th percentile is 0.52 K: 5.5 times it), of any probe 0.79 µm.
 pub const JUMP_FLOOR: f64 = 2.0;
 
+/// A step of the time axis this many times the median step, and at least [`GAP_FLOOR_S`], is a
+/// gap in the log.
+pub const GAP_FACTOR: f64 = 10.0;
+/// The shortest gap said (s): shorter than a lumped network's time constants.
+pub const GAP_FLOOR_S: f64 = 600.0;
+
 /// What makes a reading suspect.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -664,6 +670,9 @@ pub enum SuspectKind {
     /// One reading repeated exactly for [`STUCK_FLOOR_S`] or longer: a frozen transmitter, or a
     /// logger's coarse resolution on a steady temperature.
     Repeat,
+    /// A gap in the log ([`GAP_FACTOR`] median steps and [`GAP_FLOOR_S`] or longer): the logger
+    /// stopped, and what the machine did meanwhile is not in the run. `column` is `time_s`.
+    Gap,
 }
 
 /// Readings of a run that the run itself makes suspect. A run to be diagnosed or identified has
@@ -709,6 +718,26 @@ pub fn suspect_readings(
         return out;
     }
     let step = median_step(time).unwrap_or(1.0).max(f64::MIN_POSITIVE);
+    let gap_limit = (GAP_FACTOR * step).max(GAP_FLOOR_S);
+    let gaps: Vec<(usize, f64)> = (1..n)
+        .map(|i| (i, time[i] - time[i - 1]))
+        .filter(|&(_, h)| h >= gap_limit)
+        .collect();
+    if let Some(&(row, _)) = gaps.first() {
+        let (count, longest) = (gaps.len(), gaps.iter().map(|g| g.1).fold(0.0, f64::max));
+        out.push(Suspect {
+            column: "time_s".into(),
+            kind: SuspectKind::Gap,
+            row: row + 1,
+            count,
+            size: longest,
+            text: format!(
+                "{source}: the log has {count} gap{s} of {gap_limit:.0} s or more (its median step is {step} s), the first before row {}, the longest {longest:.0} s: the logger stopped? Across a gap the model holds the inputs and the room at the reading before it, and what the machine did meanwhile is not in the run; the run is used as read",
+                row + 1,
+                s = if count == 1 { "" } else { "s" },
+            ),
+        });
+    }
     for (name, col) in names.iter().zip(cols) {
         if col.len() != n || col.iter().any(|v| !v.is_finite()) {
             continue;

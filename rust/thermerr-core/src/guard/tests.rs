@@ -369,13 +369,43 @@ fn a_frozen_reading_is_a_repeat_and_a_long_gap_is_not_a_jump() {
         *yi -= 4.0 + 0.001 * i as f64;
     }
     let s = suspect_readings("run.csv", &["T_a"], &[&y], &t);
-    assert_eq!(s.len(), 1, "{s:?}");
-    assert_eq!((s[0].kind, s[0].row), (SuspectKind::Repeat, 301));
-    assert_eq!(s[0].size, 199.0 * 15.0);
+    assert_eq!(s.len(), 2, "{s:?}");
+    // the day off is said once, as the log's gap (before row 801), not as the column's jump
+    assert_eq!(
+        (s[0].column.as_str(), s[0].kind, s[0].row, s[0].count),
+        ("time_s", SuspectKind::Gap, 801, 1)
+    );
+    assert_eq!(s[0].size, 86_400.0 + 15.0);
+    assert!(!s[0].fails());
+    assert_eq!((s[1].kind, s[1].row), (SuspectKind::Repeat, 301));
+    assert_eq!(s[1].size, 199.0 * 15.0);
     // shorter than the stuck floor: not said
     let (t, mut y) = warming(960);
     for v in y.iter_mut().skip(300).take(100) {
         *v = 23.5;
     }
+    assert!(suspect_readings("run.csv", &["T_a"], &[&y], &t).is_empty());
+}
+
+#[test]
+fn a_gap_is_ten_median_steps_and_ten_minutes() {
+    // 15-s steps: a 9.5-min gap is not said (under the floor), a 10-min one is
+    for (extra, said) in [(570.0 - 15.0, false), (600.0 - 15.0, true)] {
+        let (mut t, y) = warming(960);
+        for ti in t.iter_mut().skip(400) {
+            *ti += extra;
+        }
+        let s = suspect_readings("run.csv", &["T_a"], &[&y], &t);
+        assert_eq!(
+            s.iter().any(|x| x.kind == SuspectKind::Gap && x.row == 401),
+            said,
+            "{s:?}"
+        );
+    }
+    // 120-s steps: the floor is ten steps (20 min), not 10 min
+    let t: Vec<f64> = (0..300)
+        .map(|i| 120.0 * i as f64 + if i >= 100 { 900.0 } else { 0.0 })
+        .collect();
+    let y: Vec<f64> = t.iter().map(|v| 20.0 + v / 3600.0).collect();
     assert!(suspect_readings("run.csv", &["T_a"], &[&y], &t).is_empty());
 }
