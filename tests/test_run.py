@@ -95,6 +95,17 @@ def test_nan_policies(write_csv):
         tr.read_run(path, nan="zero")
 
 
+def test_a_column_with_no_values_is_named_with_what_to_do(write_csv):
+    """A sensor channel logged but never connected: every cell blank. Interpolating has nothing
+    to fill it from and dropping rows leaves none; both errors name the column and say to remove
+    it (before, dropping only said that nothing was left)."""
+    path = write_csv("time_s,T_a,T_dead,E_z\n0,20,,0\n10,21,,1\n20,22,,2\n")
+    with pytest.raises(DataError, match=r"column `T_dead` has no values at all .*remove the column"):
+        tr.read_run(path, nan="interpolate")
+    with pytest.raises(DataError, match=r"nothing left after dropping \(`T_dead` has no values at all.*remove that column"):
+        tr.read_run(path, nan="drop")
+
+
 def test_from_frame_equals_csv(write_csv):
     pd = pytest.importorskip("pandas")
     path = write_csv(GOOD)

@@ -315,9 +315,22 @@ impl Run {
                     .collect();
                 dropped_rows = (0..n).filter(|&i| !keep[i]).map(|i| i + 1).collect();
                 if dropped_rows.len() == n {
-                    return Err(whole(
-                        "every row has a missing value: nothing left after dropping".into(),
-                    ));
+                    let empty: Vec<String> = keep_names
+                        .iter()
+                        .zip(&keep_cols)
+                        .filter(|(_, c)| c.iter().all(|v| v.is_nan()))
+                        .map(|(name, _)| format!("`{name}`"))
+                        .collect();
+                    return Err(whole(if empty.is_empty() {
+                        "every row has a missing value: nothing left after dropping".into()
+                    } else {
+                        format!(
+                            "every row has a missing value: nothing left after dropping ({} {} no values at all: a sensor not connected? remove {} from the file)",
+                            empty.join(", "),
+                            if empty.len() == 1 { "has" } else { "have" },
+                            if empty.len() == 1 { "that column" } else { "those columns" },
+                        )
+                    }));
                 }
                 time = select(&time, &keep);
                 keep_cols = keep_cols.iter().map(|c| select(c, &keep)).collect();
@@ -326,7 +339,9 @@ impl Run {
                 for (name, col) in keep_names.iter().zip(keep_cols.iter_mut()) {
                     let filled = interpolate_gaps(&time, col);
                     if filled == usize::MAX {
-                        return Err(whole(format!("column `{name}` has no values at all")));
+                        return Err(whole(format!(
+                            "column `{name}` has no values at all (a sensor not connected?): remove the column from the file"
+                        )));
                     }
                     interpolated += filled;
                 }
