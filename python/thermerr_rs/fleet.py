@@ -476,8 +476,9 @@ def diagnose_runs(
     on the rest (``holdout_fraction``). ``figures``: ``verdict``, ``column`` (with
     ``alternatives``: the other columns that explain the held-out error as well, comma-separated,
     as ``sensors`` of a fit; see :attr:`~thermerr_rs.thermal.Diagnosis.causes`), ``suspect``
-    (the columns with suspect readings, comma-separated: a jump or a frozen reading, listed in the
-    run's ``report.json`` as ``suspect_readings``), ``gain_pct``,
+    (the columns with suspect readings, comma-separated: a jump or a frozen reading, or
+    ``time_s`` for a gap in the log, listed in the run's ``report.json`` as
+    ``suspect_readings``), ``gain_pct``,
     ``baseline_rms`` and ``extended_rms`` (held-out, µm), and ``baseline_unique`` (False where a
     recalibrated baseline has a second solution: :attr:`~thermerr_rs.thermal.Diagnosis.baseline_unique`).
     ``network``: the baseline's network
