@@ -47,8 +47,23 @@ else:  # scikit-learn < 1.6 reads the expected failures from the _xfail_checks t
     sklearn_checks = parametrize_with_checks(CHECKED)
 
 
+@pytest.fixture
+def seeded_global_rng():
+    """Some of scikit-learn's checks draw from numpy's global generator unseeded (e.g.
+    ``check_methods_sample_order_invariance`` permutes the samples with
+    ``np.random.permutation``), so their outcome depended on what earlier tests drew. For
+    ``AGORegressor(MLR())`` that check passed exactly when the permutation kept sample 0 first
+    (1 in 20): the IAGO of a linear model differs from the unordered prediction only in the
+    first row, the one that carries the intercept. Seeding makes every check's data the same
+    in every run; the previous state is restored afterwards."""
+    state = np.random.get_state()
+    np.random.seed(0)
+    yield
+    np.random.set_state(state)
+
+
 @sklearn_checks
-def test_sklearn_check_estimator(estimator, check):
+def test_sklearn_check_estimator(estimator, check, seeded_global_rng):
     check(estimator)
 
 
