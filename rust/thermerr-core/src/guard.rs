@@ -660,6 +660,53 @@ pub const GAP_FACTOR: f64 = 10.0;
 /// The shortest gap said (s): shorter than a lumped network's time constants.
 pub const GAP_FLOOR_S: f64 = 600.0;
 
+/// What is done with a temperature that jumps ([`Suspect::fails`]), as its suspect line says it.
+pub const FAILING_TEMPERATURE: &str = "Identification takes it for neither the room nor a node's sensor, the diagnosis does not try it as a heat source, and where it is a node's sensor its readings from a jump to the next (to the end of the run after the last) are not fitted; drop the column or mend the rows if the change is real";
+
+/// The rows (0-based, each the reading after the step) where `col` jumps: a step whose rate is
+/// more than [`JUMP_FACTOR`] times the column's 99th percentile of rates and [`JUMP_FLOOR`]
+/// units per median step or more. `col` has one finite value per row of `time`.
+pub fn jump_rows(col: &[f64], time: &[f64]) -> Vec<usize> {
+    if time.len() < 3 || col.len() != time.len() {
+        return Vec::new();
+    }
+    let step = median_step(time).unwrap_or(1.0).max(f64::MIN_POSITIVE);
+    jump_rows_at(col, time, step)
+}
+
+fn jump_rows_at(col: &[f64], time: &[f64], step: f64) -> Vec<usize> {
+    let n = time.len();
+    let rates: Vec<f64> = (1..n)
+        .map(|i| (col[i] - col[i - 1]).abs() / (time[i] - time[i - 1]).max(f64::MIN_POSITIVE))
+        .collect();
+    let mut sorted = rates.clone();
+    let at = ((sorted.len() - 1) as f64 * 0.99).round() as usize;
+    let (_, &mut q99, _) = sorted.select_nth_unstable_by(at, f64::total_cmp);
+    let limit = (JUMP_FACTOR * q99).max(JUMP_FLOOR / step);
+    (1..n).filter(|&i| rates[i - 1] > limit).collect()
+}
+
+/// The rows of a sensor that fails in the run, not to be fitted: from each odd-numbered jump
+/// ([`jump_rows`]) to the next (the sensor falls off and comes back: a spike, a loose contact,
+/// a transmitter stuck at its rail for a while), and from the last unpaired one to the end (an
+/// open thermocouple stays at its rail). A column that jumps is taken as right before its first
+/// jump. Half-open row ranges, in order; empty for a column that never jumps.
+pub fn failing_rows(col: &[f64], time: &[f64]) -> Vec<std::ops::Range<usize>> {
+    if col.iter().any(|v| !v.is_finite()) {
+        return Vec::new();
+    }
+    paired(&jump_rows(col, time), col.len())
+}
+
+/// Jumps paired into failing stretches of `n` rows: each odd-numbered jump to the next, the
+/// last unpaired one to the end.
+fn paired(jumps: &[usize], n: usize) -> Vec<std::ops::Range<usize>> {
+    jumps
+        .chunks(2)
+        .map(|p| p[0]..p.get(1).copied().unwrap_or(n))
+        .collect()
+}
+
 /// What makes a reading suspect.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -697,7 +744,8 @@ impl Suspect {
     /// moves otherwise, and [`JUMP_FLOOR`] or more per step: an open thermocouple falling to its
     /// rail value, a loose cable). A repeat is not: a logger's coarse resolution on a steady
     /// temperature gives one too. Identification takes a failing temperature for neither the
-    /// room nor a node's sensor, and the diagnosis does not try it as a heat source.
+    /// room nor a node's sensor, the diagnosis does not try it as a heat source, and a node's
+    /// sensor is not fitted on its [`failing_rows`] ([`FAILING_TEMPERATURE`]).
     pub fn fails(&self) -> bool {
         self.kind == SuspectKind::Jump
     }
@@ -742,24 +790,13 @@ pub fn suspect_readings(
         if col.len() != n || col.iter().any(|v| !v.is_finite()) {
             continue;
         }
-        let rates: Vec<f64> = (1..n)
-            .map(|i| (col[i] - col[i - 1]).abs() / (time[i] - time[i - 1]).max(f64::MIN_POSITIVE))
-            .collect();
-        let mut sorted = rates.clone();
-        sorted.sort_by(f64::total_cmp);
-        let q99 = sorted[((sorted.len() - 1) as f64 * 0.99).round() as usize];
-        let limit = (JUMP_FACTOR * q99).max(JUMP_FLOOR / step);
-        let (mut count, mut first, mut largest) = (0usize, 0usize, 0.0f64);
-        for (k, &r) in rates.iter().enumerate() {
-            if r > limit {
-                if count == 0 {
-                    first = k + 1;
-                }
-                count += 1;
-                largest = largest.max((col[k + 1] - col[k]).abs());
-            }
-        }
-        if count > 0 {
+        let jumps = jump_rows_at(col, time, step);
+        if let Some(&first) = jumps.first() {
+            let count = jumps.len();
+            let largest = jumps
+                .iter()
+                .map(|&k| (col[k] - col[k - 1]).abs())
+                .fold(0.0, f64::max);
             out.push(Suspect {
                 column: name.to_string(),
                 kind: SuspectKind::Jump,
@@ -767,14 +804,21 @@ pub fn suspect_readings(
                 count,
                 size: largest,
                 text: format!(
-                    "{source}: {name} jumps by up to {largest:.3} {unit} from one reading to the next ({count} time{s}, first at row {}), more than {JUMP_FACTOR} times the column's usual fastest change: a sensor fault (an open or loose sensor, a spike)? The run is used as read; drop the column or the rows if so",
+                    "{source}: {name} jumps by up to {largest:.3} {unit} from one reading to the next ({count} time{s}, first at row {}), more than {JUMP_FACTOR} times the column's usual fastest change: a sensor fault (an open or loose sensor, a spike)? {what}",
                     first + 1,
                     unit = if name.starts_with("E_") { "µm" } else { "K" },
                     s = if count == 1 { "" } else { "s" },
+                    what = if name.starts_with("E_") {
+                        "The run is used as read; drop the column or the rows if so"
+                    } else {
+                        FAILING_TEMPERATURE
+                    },
                 ),
             });
         }
         let (row, seconds) = longest_repeat(n, |i| col[i], |i| time[i]);
+        // a temperature's repeat inside its failing rows (the rail value of an open sensor)
+        let failing = !name.starts_with("E_") && paired(&jumps, n).iter().any(|r| r.contains(&row));
         if seconds >= STUCK_FLOOR_S {
             out.push(Suspect {
                 column: name.to_string(),
@@ -783,10 +827,14 @@ pub fn suspect_readings(
                 count: 1,
                 size: seconds,
                 text: format!(
-                    "{source}: {name} repeats one reading ({}) for {:.0} s from row {}: a stuck sensor, or a logger's coarse resolution on a steady temperature? The run is used as read",
+                    "{source}: {name} repeats one reading ({}) for {:.0} s from row {}: {}",
                     col[row],
                     seconds,
-                    row + 1
+                    row + 1,
+                    match failing {
+                        true => "inside the rows of its jump, not fitted",
+                        false => "a stuck sensor, or a logger's coarse resolution on a steady temperature? The run is used as read",
+                    }
                 ),
             });
         }

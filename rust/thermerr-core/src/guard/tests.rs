@@ -409,3 +409,45 @@ fn a_gap_is_ten_median_steps_and_ten_minutes() {
     let y: Vec<f64> = t.iter().map(|v| 20.0 + v / 3600.0).collect();
     assert!(suspect_readings("run.csv", &["T_a"], &[&y], &t).is_empty());
 }
+
+#[test]
+fn a_failing_sensor_is_not_fitted_from_its_jump_to_the_next_or_the_end() {
+    let (t, clean) = warming(960);
+    assert!(failing_rows(&clean, &t).is_empty());
+    // a spike: one reading out
+    let mut y = clean.clone();
+    y[500] += 60.0;
+    assert_eq!(failing_rows(&y, &t), vec![500..501]);
+    // stuck high for a while, then back
+    let mut y = clean.clone();
+    for v in &mut y[300..420] {
+        *v = 85.0;
+    }
+    assert_eq!(failing_rows(&y, &t), vec![300..420]);
+    // an open thermocouple at its rail to the end; its repeat is said inside those rows
+    let mut y = clean.clone();
+    for v in &mut y[600..] {
+        *v = -200.0;
+    }
+    assert_eq!(failing_rows(&y, &t), vec![600..960]);
+    let s = suspect_readings("run.csv", &["T_a"], &[&y], &t);
+    assert_eq!((s[0].kind, s[0].row), (SuspectKind::Jump, 601));
+    assert!(s[0].text.contains("are not fitted"), "{}", s[0].text);
+    assert_eq!((s[1].kind, s[1].row), (SuspectKind::Repeat, 601));
+    assert!(
+        s[1].text
+            .ends_with("inside the rows of its jump, not fitted"),
+        "{}",
+        s[1].text
+    );
+    // a probe's jump keeps the words "used as read" (an axis is fitted as read)
+    let s = suspect_readings("run.csv", &["E_a"], &[&y], &t);
+    assert!(
+        s[0].text.contains("The run is used as read"),
+        "{}",
+        s[0].text
+    );
+    // a column with a missing value is not judged
+    y[10] = f64::NAN;
+    assert!(failing_rows(&y, &t).is_empty());
+}

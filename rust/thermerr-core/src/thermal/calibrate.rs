@@ -338,12 +338,56 @@ fn store_drift(m: &mut Machine, d: usize, coef: &[f64]) {
     }
 }
 
+/// A sensed node's reading in a run.
+pub struct Sensed<'a> {
+    /// The node's index in the machine.
+    pub node: usize,
+    pub meas: &'a [f64],
+    /// Rows not fitted, in order: where the run shows the sensor failing
+    /// ([`crate::guard::failing_rows`]: from a jump to the next, or to the end). Empty for a
+    /// sensor that reads throughout, the usual case.
+    pub failing: Vec<std::ops::Range<usize>>,
+}
+
+impl Sensed<'_> {
+    /// Whether row `k` is fitted.
+    pub fn reads(&self, k: usize) -> bool {
+        !self.failing.iter().any(|r| r.contains(&k))
+    }
+
+    /// How many of the first `rows` rows are fitted.
+    pub fn fitted_rows(&self, rows: usize) -> usize {
+        rows - self
+            .failing
+            .iter()
+            .map(|r| r.end.min(rows).saturating_sub(r.start))
+            .sum::<usize>()
+    }
+}
+
+/// The sensed simulated nodes of `m` (a sensor and no boundary) and their readings in `run`,
+/// in the machine's order.
+pub fn sensed<'a>(m: &Machine, run: &RunView<'a>) -> Result<Vec<Sensed<'a>>> {
+    let mut out = Vec::new();
+    for (i, n) in m.nodes.iter().enumerate() {
+        if let (Some(c), None) = (&n.sensor, &n.boundary) {
+            let meas = run.col(c)?;
+            out.push(Sensed {
+                node: i,
+                meas,
+                failing: crate::guard::failing_rows(meas, run.time),
+            });
+        }
+    }
+    Ok(out)
+}
+
 /// The measured series a calibration compares with.
 pub struct Targets<'a> {
     pub axis_index: usize,
     pub measured_e: &'a [f64],
-    /// (node index, measured reading) per sensed simulated node
-    pub sensors: Vec<(usize, &'a [f64])>,
+    /// per sensed simulated node
+    pub sensors: Vec<Sensed<'a>>,
 }
 
 pub fn targets<'a>(m: &Machine, run: &RunView<'a>, axis: &str) -> Result<Targets<'a>> {
@@ -353,17 +397,10 @@ pub fn targets<'a>(m: &Machine, run: &RunView<'a>, axis: &str) -> Result<Targets
             format!("the machine has no drift entry for `{axis}`"),
         )
     })?;
-    let measured_e = run.col(axis)?;
-    let mut sensors = Vec::new();
-    for (i, n) in m.nodes.iter().enumerate() {
-        if let (Some(c), None) = (&n.sensor, &n.boundary) {
-            sensors.push((i, run.col(c)?));
-        }
-    }
     Ok(Targets {
         axis_index,
-        measured_e,
-        sensors,
+        measured_e: run.col(axis)?,
+        sensors: sensed(m, run)?,
     })
 }
 
@@ -430,11 +467,23 @@ fn normalised(
 ) -> Vec<f64> {
     let mut r = Vec::with_capacity(rows * (tg.sensors.len() + 1));
     let nn = m.nodes.len();
-    for &(i, meas) in &tg.sensors {
+    for sn in &tg.sensors {
+        let (i, meas) = (sn.node, sn.meas);
         let node = &m.nodes[i];
         let (off, drift) = (node.sensor_offset_k, node.sensor_drift_k_per_h);
         let rows_of = temps.chunks_exact(nn).zip(meas).take(rows);
-        if drift == 0.0 {
+        if !sn.failing.is_empty() {
+            // a failing sensor: its fitted rows only
+            r.extend(
+                rows_of
+                    .zip(run.time)
+                    .enumerate()
+                    .filter(|(k, _)| sn.reads(*k))
+                    .map(|(_, ((t, mk), tk))| {
+                        (t[i] + off + drift * (tk - run.time[0]) / 3600.0 - mk) / sigma_t
+                    }),
+            );
+        } else if drift == 0.0 {
             // the drift term is ±0 then: the same numbers without it (the inner loop's cost);
             // the node's column gathered first, so that the arithmetic runs on contiguous data
             let start = r.len();
@@ -512,7 +561,16 @@ fn calibrate_all_rows(
         let s: Vec<f64> = tg
             .sensors
             .iter()
-            .map(|(_, c)| noise_level(&c[..rows]))
+            .map(|sn| match sn.failing.is_empty() {
+                true => noise_level(&sn.meas[..rows]),
+                false => {
+                    let kept: Vec<f64> = (0..rows)
+                        .filter(|&k| sn.reads(k))
+                        .map(|k| sn.meas[k])
+                        .collect();
+                    noise_level(&kept)
+                }
+            })
             .collect();
         let mean = if s.is_empty() {
             0.03
@@ -561,7 +619,12 @@ fn calibrate_all_rows(
         let lo: Vec<f64> = free.iter().map(|f| f.lo).collect();
         let hi: Vec<f64> = free.iter().map(|f| f.hi).collect();
         // a step's ΔBIC ≈ n·ΔSSR/SSR: n times the relative decrease of the cost
-        let n_data = rows * (tg.sensors.len() + usize::from(opts.fit_error));
+        let n_data = tg
+            .sensors
+            .iter()
+            .map(|sn| sn.fitted_rows(rows))
+            .sum::<usize>()
+            + rows * usize::from(opts.fit_error);
         let lm = LmOptions {
             max_iter: opts.max_iter,
             ftol: (opts.min_bic_step / n_data as f64).max(1e-9),
@@ -641,35 +704,31 @@ pub fn offsets_by_name(m: &Machine, named: &BTreeMap<String, f64>) -> Result<Vec
 /// formats.md start (the ambient's first reading).
 pub fn fit_initial_offsets(m: &Machine, run: &RunView<'_>, window: usize) -> Result<Vec<f64>> {
     let nn = m.nodes.len();
-    let sensed: Vec<(usize, &[f64])> = m
-        .nodes
-        .iter()
-        .enumerate()
-        .filter(|(_, n)| n.sensor.is_some() && n.boundary.is_none())
-        .map(|(i, n)| Ok((i, run.col(n.sensor.as_deref().unwrap_or_default())?)))
-        .collect::<Result<_>>()?;
+    let sensed = sensed(m, run)?;
     let w = window.min(run.len()).max(1);
     if sensed.is_empty() {
         return Ok(vec![0.0; nn]);
     }
     let base = simulate_nodes(m, run, &Init::Offsets(vec![0.0; nn]))?;
     let mut cols = Vec::new();
-    for &(j, _) in &sensed {
+    for sj in &sensed {
         let mut off = vec![0.0; nn];
-        off[j] = 1.0;
+        off[sj.node] = 1.0;
         let resp = simulate_nodes(m, run, &Init::Offsets(off))?;
         let mut col = Vec::with_capacity(w * sensed.len());
-        for &(i, _) in &sensed {
-            for k in 0..w {
+        for sn in &sensed {
+            let i = sn.node;
+            for k in (0..w).filter(|&k| sn.reads(k)) {
                 col.push(resp[k * nn + i] - base[k * nn + i]);
             }
         }
         cols.push(col);
     }
     let mut rhs = Vec::with_capacity(w * sensed.len());
-    for &(i, meas) in &sensed {
+    for sn in &sensed {
+        let (i, meas) = (sn.node, sn.meas);
         let node: &NodeSpec = &m.nodes[i];
-        for k in 0..w {
+        for k in (0..w).filter(|&k| sn.reads(k)) {
             let pred = base[k * nn + i]
                 + node.sensor_offset_k
                 + node.sensor_drift_k_per_h * (run.time[k] - run.time[0]) / 3600.0;
@@ -679,8 +738,8 @@ pub fn fit_initial_offsets(m: &Machine, run: &RunView<'_>, window: usize) -> Res
     let cols: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
     let sol = lstsq_columns(&cols, &rhs)?;
     let mut off = vec![0.0; nn];
-    for (&(j, _), v) in sensed.iter().zip(sol) {
-        off[j] = v.clamp(-2.0, 2.0);
+    for (sj, v) in sensed.iter().zip(sol) {
+        off[sj.node] = v.clamp(-2.0, 2.0);
     }
     Ok(off)
 }

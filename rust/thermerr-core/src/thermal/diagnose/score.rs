@@ -55,14 +55,19 @@ pub(super) fn holdout(cal: &Calibration, held: &HeldOut<'_, '_>) -> Result<Holdo
         .sum();
     let nn = m.nodes.len();
     let mut sensor_residuals = Vec::new();
-    for &(i, meas_t) in &tg.sensors {
+    for sn in &tg.sensors {
+        let (i, meas_t) = (sn.node, sn.meas);
         let node = &m.nodes[i];
+        // a failing sensor's rows that are not fitted are not scored either: 0 there
         let res: Vec<f64> = (from..run.len())
-            .map(|k| {
-                sim.temps[k * nn + i]
-                    + node.sensor_offset_k
-                    + node.sensor_drift_k_per_h * (run.time[k] - run.time[0]) / 3600.0
-                    - meas_t[k]
+            .map(|k| match sn.reads(k) {
+                true => {
+                    sim.temps[k * nn + i]
+                        + node.sensor_offset_k
+                        + node.sensor_drift_k_per_h * (run.time[k] - run.time[0]) / 3600.0
+                        - meas_t[k]
+                }
+                false => 0.0,
             })
             .collect();
         joint += res.iter().map(|v| (v / cal.sigma_t).powi(2)).sum::<f64>();
