@@ -87,8 +87,9 @@ class SuspectReadingWarning(UserWarning):
     """A reading of a run that the run itself makes suspect (a jump far beyond the column's usual
     change, one reading repeated for 30 min or more, a gap in the log's time axis): said, and
     used as read, except that identification takes a temperature with a jump for neither the
-    room nor a node's sensor, the diagnosis does not try it as a heat source, and a node's
-    sensor is not fitted from a jump to the next (to the end of the run after the last). The diagnosis
+    room nor a node's sensor, the diagnosis does not try it as a heat source, and the readings
+    of a node's sensor or of a probe from a jump to the next (to the end of the run after the
+    last) are neither fitted nor scored. The diagnosis
     lists them in ``report["suspect_readings"]``, identification in its notes; the command line
     prints them as lines of the result instead."""
 

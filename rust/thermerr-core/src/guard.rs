@@ -647,7 +647,7 @@ fn longest_repeat(
 }
 
 /// A jump between two readings is suspect when its rate is more than this many times the
-/// column's 99th percentile of rates ...
+/// column's 99th percentile of rates (on a run of under 400 steps, its fifth-largest) ...
 pub const JUMP_FACTOR: f64 = 20.0;
 /// ... and more than this many units (K, µm) per median step of the run. On the real 46-h run
 /// (15 s, 16 temperatures, 5 probes) the largest step of any column is 2.9 K (a fast sensor
@@ -660,6 +660,8 @@ pub const GAP_FACTOR: f64 = 10.0;
 /// The shortest gap said (s): shorter than a lumped network's time constants.
 pub const GAP_FLOOR_S: f64 = 600.0;
 
+/// What is done with a probe (an error axis) that jumps, as its suspect line says it.
+pub const FAILING_PROBE: &str = "Its readings from a jump to the next (to the end of the run after the last) are neither fitted nor scored; mend the rows if the change is real";
 /// What is done with a temperature that jumps ([`Suspect::fails`]), as its suspect line says it.
 pub const FAILING_TEMPERATURE: &str = "Identification takes it for neither the room nor a node's sensor, the diagnosis does not try it as a heat source, and where it is a node's sensor its readings from a jump to the next (to the end of the run after the last) are not fitted; drop the column or mend the rows if the change is real";
 
@@ -680,7 +682,10 @@ fn jump_rows_at(col: &[f64], time: &[f64], step: f64) -> Vec<usize> {
         .map(|i| (col[i] - col[i - 1]).abs() / (time[i] - time[i - 1]).max(f64::MIN_POSITIVE))
         .collect();
     let mut sorted = rates.clone();
-    let at = ((sorted.len() - 1) as f64 * 0.99).round() as usize;
+    // the 99th percentile, but never one of the four largest: on a short run (under 400
+    // steps) a spike's two steps would otherwise be the percentile itself and hide
+    let at =
+        (((sorted.len() - 1) as f64 * 0.99).round() as usize).min(sorted.len().saturating_sub(5));
     let (_, &mut q99, _) = sorted.select_nth_unstable_by(at, f64::total_cmp);
     let limit = (JUMP_FACTOR * q99).max(JUMP_FLOOR / step);
     (1..n).filter(|&i| rates[i - 1] > limit).collect()
@@ -809,7 +814,7 @@ pub fn suspect_readings(
                     unit = if name.starts_with("E_") { "µm" } else { "K" },
                     s = if count == 1 { "" } else { "s" },
                     what = if name.starts_with("E_") {
-                        "The run is used as read; drop the column or the rows if so"
+                        FAILING_PROBE
                     } else {
                         FAILING_TEMPERATURE
                     },
@@ -818,7 +823,7 @@ pub fn suspect_readings(
         }
         let (row, seconds) = longest_repeat(n, |i| col[i], |i| time[i]);
         // a temperature's repeat inside its failing rows (the rail value of an open sensor)
-        let failing = !name.starts_with("E_") && paired(&jumps, n).iter().any(|r| r.contains(&row));
+        let failing = paired(&jumps, n).iter().any(|r| r.contains(&row));
         if seconds >= STUCK_FLOOR_S {
             out.push(Suspect {
                 column: name.to_string(),

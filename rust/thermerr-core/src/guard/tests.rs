@@ -440,14 +440,24 @@ fn a_failing_sensor_is_not_fitted_from_its_jump_to_the_next_or_the_end() {
         "{}",
         s[1].text
     );
-    // a probe's jump keeps the words "used as read" (an axis is fitted as read)
+    // a probe's failing rows are neither fitted nor scored
     let s = suspect_readings("run.csv", &["E_a"], &[&y], &t);
     assert!(
-        s[0].text.contains("The run is used as read"),
+        s[0].text.contains("neither fitted nor scored"),
         "{}",
         s[0].text
     );
     // a column with a missing value is not judged
     y[10] = f64::NAN;
     assert!(failing_rows(&y, &t).is_empty());
+}
+
+#[test]
+fn a_spike_on_a_short_run_is_seen() {
+    // 121 readings: the 99th percentile of 120 steps would be the spike's own second step
+    let (t, mut y) = warming(121);
+    y[60] = 9999.0;
+    assert_eq!(failing_rows(&y, &t), vec![60..61]);
+    let s = suspect_readings("run.csv", &["E_a"], &[&y], &t);
+    assert_eq!((s[0].kind, s[0].row, s[0].count), (SuspectKind::Jump, 61, 2));
 }

@@ -262,17 +262,19 @@ pub fn apply(m: &Machine, free: &[FreeParam], x: &[f64]) -> (Machine, Vec<f64>) 
     (out, init)
 }
 
-/// The linear drift terms of `axis` fitted to `measured` over `rows`, with weak priors.
-/// Returns the coefficients (lagged terms first, then instant ones) and the fitted series.
+/// The linear drift terms of `axis` fitted to `error` over its fitted rows among the first
+/// `rows`, with weak priors. Returns the coefficients (lagged terms first, then instant ones)
+/// and the fitted series (every row).
 fn fit_drift(
     m: &Machine,
     d: usize,
     run: &RunView<'_>,
     temps: &[f64],
-    measured: &[f64],
+    error: &Reading<'_>,
     rows: usize,
     sigma_e: f64,
 ) -> Result<(Vec<f64>, Vec<f64>)> {
+    let measured = error.values;
     let spec = &m.drift[d];
     let terms = drift_terms(m, spec, run, temps)?;
     let mut basis: Vec<Vec<f64>> = Vec::new();
@@ -292,8 +294,22 @@ fn fit_drift(
     if nb == 0 {
         return Ok((Vec::new(), vec![0.0; measured.len()]));
     }
-    let cols: Vec<&[f64]> = basis.iter().map(Vec::as_slice).collect();
-    let coef = lstsq_with_prior(&cols, measured, rows, sigma_e, &prior)?;
+    let coef = if error.failing.is_empty() {
+        let cols: Vec<&[f64]> = basis.iter().map(Vec::as_slice).collect();
+        lstsq_with_prior(&cols, measured, rows, sigma_e, &prior)?
+    } else {
+        // a failing probe: the fitted rows only
+        let keep = |v: &[f64]| -> Vec<f64> {
+            (0..rows)
+                .filter(|&k| error.reads(k))
+                .map(|k| v[k])
+                .collect()
+        };
+        let kept: Vec<Vec<f64>> = basis.iter().map(|b| keep(b)).collect();
+        let cols: Vec<&[f64]> = kept.iter().map(Vec::as_slice).collect();
+        let y = keep(measured);
+        lstsq_with_prior(&cols, &y, y.len(), sigma_e, &prior)?
+    };
     let mut fitted = vec![0.0; measured.len()];
     for (c, s) in coef.iter().zip(&basis) {
         for (f, v) in fitted.iter_mut().zip(s) {
@@ -338,19 +354,24 @@ fn store_drift(m: &mut Machine, d: usize, coef: &[f64]) {
     }
 }
 
-/// A sensed node's reading in a run.
-pub struct Sensed<'a> {
-    /// The node's index in the machine.
-    pub node: usize,
-    pub meas: &'a [f64],
-    /// Rows not fitted, in order: where the run shows the sensor failing
-    /// ([`crate::guard::failing_rows`]: from a jump to the next, or to the end). Empty for a
-    /// sensor that reads throughout, the usual case.
+/// A measured column of a run, and the rows where the run shows it failing
+/// ([`crate::guard::failing_rows`]: from a jump to the next, or to the end), which are neither
+/// fitted nor scored. No failing rows is the usual case, and then nothing changes.
+pub struct Reading<'a> {
+    pub values: &'a [f64],
+    /// Half-open row ranges, in order.
     pub failing: Vec<std::ops::Range<usize>>,
 }
 
-impl Sensed<'_> {
-    /// Whether row `k` is fitted.
+impl<'a> Reading<'a> {
+    pub fn of(values: &'a [f64], time: &[f64]) -> Self {
+        Reading {
+            values,
+            failing: crate::guard::failing_rows(values, time),
+        }
+    }
+
+    /// Whether row `k` is fitted and scored.
     pub fn reads(&self, k: usize) -> bool {
         !self.failing.iter().any(|r| r.contains(&k))
     }
@@ -363,6 +384,25 @@ impl Sensed<'_> {
             .map(|r| r.end.min(rows).saturating_sub(r.start))
             .sum::<usize>()
     }
+
+    /// The noise level ([`noise_level`]) of the fitted rows among the first `rows`.
+    pub fn noise(&self, rows: usize) -> f64 {
+        if self.failing.is_empty() {
+            return noise_level(&self.values[..rows]);
+        }
+        let kept: Vec<f64> = (0..rows)
+            .filter(|&k| self.reads(k))
+            .map(|k| self.values[k])
+            .collect();
+        noise_level(&kept)
+    }
+}
+
+/// A sensed node's reading in a run.
+pub struct Sensed<'a> {
+    /// The node's index in the machine.
+    pub node: usize,
+    pub reading: Reading<'a>,
 }
 
 /// The sensed simulated nodes of `m` (a sensor and no boundary) and their readings in `run`,
@@ -371,11 +411,9 @@ pub fn sensed<'a>(m: &Machine, run: &RunView<'a>) -> Result<Vec<Sensed<'a>>> {
     let mut out = Vec::new();
     for (i, n) in m.nodes.iter().enumerate() {
         if let (Some(c), None) = (&n.sensor, &n.boundary) {
-            let meas = run.col(c)?;
             out.push(Sensed {
                 node: i,
-                meas,
-                failing: crate::guard::failing_rows(meas, run.time),
+                reading: Reading::of(run.col(c)?, run.time),
             });
         }
     }
@@ -385,7 +423,8 @@ pub fn sensed<'a>(m: &Machine, run: &RunView<'a>) -> Result<Vec<Sensed<'a>>> {
 /// The measured series a calibration compares with.
 pub struct Targets<'a> {
     pub axis_index: usize,
-    pub measured_e: &'a [f64],
+    /// The axis's measured error.
+    pub error: Reading<'a>,
     /// per sensed simulated node
     pub sensors: Vec<Sensed<'a>>,
 }
@@ -399,7 +438,7 @@ pub fn targets<'a>(m: &Machine, run: &RunView<'a>, axis: &str) -> Result<Targets
     })?;
     Ok(Targets {
         axis_index,
-        measured_e: run.col(axis)?,
+        error: Reading::of(run.col(axis)?, run.time),
         sensors: sensed(m, run)?,
     })
 }
@@ -420,7 +459,7 @@ pub fn evaluate(
     let temps = simulate_nodes(m, run, &Init::Offsets(init.to_vec()))?;
     let mut fitted = m.clone();
     if refit_drift {
-        let (coef, _) = fit_drift(m, tg.axis_index, run, &temps, tg.measured_e, rows, sigma_e)?;
+        let (coef, _) = fit_drift(m, tg.axis_index, run, &temps, &tg.error, rows, sigma_e)?;
         store_drift(&mut fitted, tg.axis_index, &coef);
     }
     let sim = finish(&fitted, run, temps)?;
@@ -446,7 +485,7 @@ fn residuals(
 ) -> Result<Vec<f64>> {
     let temps = simulate_nodes_on(m, run, &Init::Offsets(init.to_vec()), steps)?;
     let e = match fit_error {
-        true => fit_drift(m, tg.axis_index, run, &temps, tg.measured_e, rows, sigma_e)?.1,
+        true => fit_drift(m, tg.axis_index, run, &temps, &tg.error, rows, sigma_e)?.1,
         false => Vec::new(),
     };
     Ok(normalised(m, run, tg, &temps, &e, rows, sigma_t, sigma_e))
@@ -468,17 +507,17 @@ fn normalised(
     let mut r = Vec::with_capacity(rows * (tg.sensors.len() + 1));
     let nn = m.nodes.len();
     for sn in &tg.sensors {
-        let (i, meas) = (sn.node, sn.meas);
+        let (i, meas) = (sn.node, sn.reading.values);
         let node = &m.nodes[i];
         let (off, drift) = (node.sensor_offset_k, node.sensor_drift_k_per_h);
         let rows_of = temps.chunks_exact(nn).zip(meas).take(rows);
-        if !sn.failing.is_empty() {
+        if !sn.reading.failing.is_empty() {
             // a failing sensor: its fitted rows only
             r.extend(
                 rows_of
                     .zip(run.time)
                     .enumerate()
-                    .filter(|(k, _)| sn.reads(*k))
+                    .filter(|(k, _)| sn.reading.reads(*k))
                     .map(|(_, ((t, mk), tk))| {
                         (t[i] + off + drift * (tk - run.time[0]) / 3600.0 - mk) / sigma_t
                     }),
@@ -497,8 +536,16 @@ fn normalised(
             }));
         }
     }
-    for (ek, mk) in e.iter().zip(tg.measured_e).take(rows) {
-        r.push((ek - mk) / sigma_e);
+    let pairs = e.iter().zip(tg.error.values).take(rows);
+    if tg.error.failing.is_empty() {
+        r.extend(pairs.map(|(ek, mk)| (ek - mk) / sigma_e));
+    } else {
+        r.extend(
+            pairs
+                .enumerate()
+                .filter(|(k, _)| tg.error.reads(*k))
+                .map(|(_, (ek, mk))| (ek - mk) / sigma_e),
+        );
     }
     r
 }
@@ -558,20 +605,7 @@ fn calibrate_all_rows(
         )));
     }
     let sigma_t = opts.sigma_t.unwrap_or_else(|| {
-        let s: Vec<f64> = tg
-            .sensors
-            .iter()
-            .map(|sn| match sn.failing.is_empty() {
-                true => noise_level(&sn.meas[..rows]),
-                false => {
-                    let kept: Vec<f64> = (0..rows)
-                        .filter(|&k| sn.reads(k))
-                        .map(|k| sn.meas[k])
-                        .collect();
-                    noise_level(&kept)
-                }
-            })
-            .collect();
+        let s: Vec<f64> = tg.sensors.iter().map(|sn| sn.reading.noise(rows)).collect();
         let mean = if s.is_empty() {
             0.03
         } else {
@@ -581,7 +615,7 @@ fn calibrate_all_rows(
     });
     let sigma_e = opts
         .sigma_e
-        .unwrap_or_else(|| noise_level(&tg.measured_e[..rows]).max(0.02));
+        .unwrap_or_else(|| tg.error.noise(rows).max(0.02));
     let free = free.unwrap_or_else(|| default_params(m, opts));
     let n_linear = {
         let d = &m.drift[tg.axis_index];
@@ -622,9 +656,9 @@ fn calibrate_all_rows(
         let n_data = tg
             .sensors
             .iter()
-            .map(|sn| sn.fitted_rows(rows))
+            .map(|sn| sn.reading.fitted_rows(rows))
             .sum::<usize>()
-            + rows * usize::from(opts.fit_error);
+            + tg.error.fitted_rows(rows) * usize::from(opts.fit_error);
         let lm = LmOptions {
             max_iter: opts.max_iter,
             ftol: (opts.min_bic_step / n_data as f64).max(1e-9),
@@ -718,7 +752,7 @@ pub fn fit_initial_offsets(m: &Machine, run: &RunView<'_>, window: usize) -> Res
         let mut col = Vec::with_capacity(w * sensed.len());
         for sn in &sensed {
             let i = sn.node;
-            for k in (0..w).filter(|&k| sn.reads(k)) {
+            for k in (0..w).filter(|&k| sn.reading.reads(k)) {
                 col.push(resp[k * nn + i] - base[k * nn + i]);
             }
         }
@@ -726,9 +760,9 @@ pub fn fit_initial_offsets(m: &Machine, run: &RunView<'_>, window: usize) -> Res
     }
     let mut rhs = Vec::with_capacity(w * sensed.len());
     for sn in &sensed {
-        let (i, meas) = (sn.node, sn.meas);
+        let (i, meas) = (sn.node, sn.reading.values);
         let node: &NodeSpec = &m.nodes[i];
-        for k in (0..w).filter(|&k| sn.reads(k)) {
+        for k in (0..w).filter(|&k| sn.reading.reads(k)) {
             let pred = base[k * nn + i]
                 + node.sensor_offset_k
                 + node.sensor_drift_k_per_h * (run.time[k] - run.time[0]) / 3600.0;

@@ -61,9 +61,7 @@
 
 use serde::Serialize;
 
-use super::calibrate::{
-    calibrate, evaluate, noise_level, targets, Calibration, CalibrationOptions,
-};
+use super::calibrate::{calibrate, evaluate, targets, Calibration, CalibrationOptions, Reading};
 use super::machine::{
     bad, Ambient, DriftSpec, Identified, LinkSpec, Machine, NodeSpec, SourceSpec,
 };
@@ -1451,8 +1449,16 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         .collect::<Result<_>>()?;
     let mut drift = Vec::new();
     for ax in &ck.axes {
-        let e = view.col(ax)?;
-        let (coef, _) = fit(&node_rises, &e[..m])?;
+        // a failing probe's rows (a spike, a probe that stops) are not fitted
+        let e = Reading::of(view.col(ax)?, view.time);
+        let (coef, _) = if e.failing.is_empty() {
+            fit(&node_rises, &e.values[..m])?
+        } else {
+            let keep =
+                |v: &[f64]| -> Vec<f64> { (0..m).filter(|&k| e.reads(k)).map(|k| v[k]).collect() };
+            let rises: Vec<Vec<f64>> = node_rises.iter().map(|r| keep(r)).collect();
+            fit(&rises, &keep(e.values))?
+        };
         drift.push(DriftSpec {
             axis: ax.clone(),
             um_per_k: names
@@ -1560,7 +1566,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     // 15 µm RMS on a 46-h run.
     for ax in ck.axes.iter().skip(1) {
         let tg = targets(&machine, &view, ax)?;
-        let sigma_e = noise_level(&view.col(ax)?[..m]).max(1e-3);
+        let sigma_e = tg.error.noise(m).max(1e-3);
         let (fitted, _, _) = evaluate(&machine, &cal.init, &view, &tg, m, 1.0, sigma_e, true)?;
         machine = fitted;
     }
@@ -1584,12 +1590,16 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let sim = simulate(&machine, &view, &Init::Offsets(cal.init.clone()))?;
     let mut axes = Vec::new();
     for (ax, pred) in &sim.drift {
-        let e = view.col(ax)?;
+        // a failing probe's rows are not scored
+        let e = Reading::of(view.col(ax)?, view.time);
+        let err = |rows: std::ops::Range<usize>| {
+            rms(rows.filter(|&i| e.reads(i)).map(|i| pred[i] - e.values[i]))
+        };
         axes.push(AxisFit {
             axis: ax.clone(),
-            train_rmse_um: rms((0..m).map(|i| pred[i] - e[i])),
-            holdout_rmse_um: rms((m..n).map(|i| pred[i] - e[i])),
-            noise_um: noise_level(&e[..m]),
+            train_rmse_um: err(0..m),
+            holdout_rmse_um: err(m..n),
+            noise_um: e.noise(m),
         });
     }
     // what a diagnosis with this network will make of it: held-out error beyond the `none` bar

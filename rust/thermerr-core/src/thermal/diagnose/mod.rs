@@ -609,8 +609,9 @@ fn round_candidates(
         )?;
         let residual: Vec<f64> = sim.drift[axis_index].1[..split]
             .iter()
-            .zip(&tg.measured_e[..split])
-            .map(|(p, y)| y - p)
+            .zip(&tg.error.values[..split])
+            .enumerate()
+            .map(|(k, (p, y))| if tg.error.reads(k) { y - p } else { 0.0 })
             .collect();
         candidates::rank_by_residual(free, train, &residual)?
     } else {

@@ -49,18 +49,36 @@ pub(super) fn holdout(cal: &Calibration, held: &HeldOut<'_, '_>) -> Result<Holdo
     if from >= run.len() {
         return Err(Error::Shape("the held-out part is empty".into()));
     }
-    let fig = metrics::scores(&tg.measured_e[from..], &e[from..], None)?;
+    let y = tg.error.values;
+    // a failing probe's rows are not scored
+    let fig = match tg.error.failing.is_empty() {
+        true => metrics::scores(&y[from..], &e[from..], None)?,
+        false => {
+            let rows: Vec<usize> = (from..run.len()).filter(|&k| tg.error.reads(k)).collect();
+            if rows.is_empty() {
+                return Err(Error::Shape(format!(
+                    "{}: {} fails over all of the held-out rows (from row {}): nothing to score it on; mend or drop those rows",
+                    run.source,
+                    held.axis,
+                    from + 1
+                )));
+            }
+            let pick = |v: &[f64]| -> Vec<f64> { rows.iter().map(|&k| v[k]).collect() };
+            metrics::scores(&pick(y), &pick(e), None)?
+        }
+    };
     let mut joint: f64 = (from..run.len())
-        .map(|k| ((tg.measured_e[k] - e[k]) / cal.sigma_e).powi(2))
+        .filter(|&k| tg.error.reads(k))
+        .map(|k| ((y[k] - e[k]) / cal.sigma_e).powi(2))
         .sum();
     let nn = m.nodes.len();
     let mut sensor_residuals = Vec::new();
     for sn in &tg.sensors {
-        let (i, meas_t) = (sn.node, sn.meas);
+        let (i, meas_t) = (sn.node, sn.reading.values);
         let node = &m.nodes[i];
         // a failing sensor's rows that are not fitted are not scored either: 0 there
         let res: Vec<f64> = (from..run.len())
-            .map(|k| match sn.reads(k) {
+            .map(|k| match sn.reading.reads(k) {
                 true => {
                     sim.temps[k * nn + i]
                         + node.sensor_offset_k
