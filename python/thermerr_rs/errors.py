@@ -88,8 +88,8 @@ class SuspectReadingWarning(UserWarning):
     change, one reading repeated for 30 min or more, a gap in the log's time axis): said, and
     used as read, except that identification takes a temperature with a jump for neither the
     room nor a node's sensor, the diagnosis does not try it as a heat source, and the readings
-    of a node's sensor or of a probe from a jump to the next (to the end of the run after the
-    last) are neither fitted nor scored. The diagnosis
+    of a node's sensor or of a probe from a jump away to a jump back (or to the end of the
+    run) are neither fitted nor scored. The diagnosis
     lists them in ``report["suspect_readings"]``, identification in its notes; the command line
     prints them as lines of the result instead."""
 

@@ -661,9 +661,9 @@ pub const GAP_FACTOR: f64 = 10.0;
 pub const GAP_FLOOR_S: f64 = 600.0;
 
 /// What is done with a probe (an error axis) that jumps, as its suspect line says it.
-pub const FAILING_PROBE: &str = "Its readings from a jump to the next (to the end of the run after the last) are neither fitted nor scored; mend the rows if the change is real";
+pub const FAILING_PROBE: &str = "Its readings from a jump away to a jump back (or to the end of the run) are neither fitted nor scored; mend the rows if the change is real";
 /// What is done with a temperature that jumps ([`Suspect::fails`]), as its suspect line says it.
-pub const FAILING_TEMPERATURE: &str = "Identification takes it for neither the room nor a node's sensor, the diagnosis does not try it as a heat source, and where it is a node's sensor its readings from a jump to the next (to the end of the run after the last) are not fitted; drop the column or mend the rows if the change is real";
+pub const FAILING_TEMPERATURE: &str = "Identification takes it for neither the room nor a node's sensor, the diagnosis does not try it as a heat source, and where it is a node's sensor its readings from a jump away to a jump back (or to the end of the run) are not fitted; drop the column or mend the rows if the change is real";
 
 /// The rows (0-based, each the reading after the step) where `col` jumps: a step whose rate is
 /// more than [`JUMP_FACTOR`] times the column's 99th percentile of rates and [`JUMP_FLOOR`]
@@ -691,25 +691,51 @@ fn jump_rows_at(col: &[f64], time: &[f64], step: f64) -> Vec<usize> {
     (1..n).filter(|&i| rates[i - 1] > limit).collect()
 }
 
-/// The rows of a sensor that fails in the run, not to be fitted: from each odd-numbered jump
-/// ([`jump_rows`]) to the next (the sensor falls off and comes back: a spike, a loose contact,
-/// a transmitter stuck at its rail for a while), and from the last unpaired one to the end (an
-/// open thermocouple stays at its rail). A column that jumps is taken as right before its first
-/// jump. Half-open row ranges, in order; empty for a column that never jumps.
+/// The rows of a sensor that fails in the run, not to be fitted. A column that jumps
+/// ([`jump_rows`]) is taken as right before its first jump. A jump away from the last right
+/// reading starts a failing stretch; a later jump ends it if it lands back near that reading
+/// (within half the jump's own size: the column returns, wherever the machine took it
+/// meanwhile); a stretch no jump ends runs to the end of the run. So a spike, a loose contact
+/// or a transmitter stuck at its rail for a while fail from the jump out to the jump back, and
+/// an open thermocouple from its fall to the end; a spike that decays over a few readings ends
+/// when the column is about back, and a jump further towards the last right reading after that
+/// opens no stretch. Half-open row ranges, in order; empty for a column that never jumps.
 pub fn failing_rows(col: &[f64], time: &[f64]) -> Vec<std::ops::Range<usize>> {
     if col.iter().any(|v| !v.is_finite()) {
         return Vec::new();
     }
-    paired(&jump_rows(col, time), col.len())
+    failing_of(col, &jump_rows(col, time))
 }
 
-/// Jumps paired into failing stretches of `n` rows: each odd-numbered jump to the next, the
-/// last unpaired one to the end.
-fn paired(jumps: &[usize], n: usize) -> Vec<std::ops::Range<usize>> {
-    jumps
-        .chunks(2)
-        .map(|p| p[0]..p.get(1).copied().unwrap_or(n))
-        .collect()
+/// [`failing_rows`] from the column's jumps.
+fn failing_of(col: &[f64], jumps: &[usize]) -> Vec<std::ops::Range<usize>> {
+    let mut out = Vec::new();
+    // (row the failing stretch started, the last right reading)
+    let mut open: Option<(usize, f64)> = None;
+    // the right reading before the last stretch that closed: a jump further towards it (the
+    // rest of a decaying spike) opens no stretch
+    let mut before: Option<f64> = None;
+    for &j in jumps {
+        match open {
+            None => {
+                let towards = before.is_some_and(|r| (col[j] - r).abs() < (col[j - 1] - r).abs());
+                if !towards {
+                    open = Some((j, col[j - 1]));
+                }
+            }
+            Some((start, right)) => {
+                if (col[j] - right).abs() <= 0.5 * (col[j] - col[j - 1]).abs() {
+                    out.push(start..j);
+                    open = None;
+                    before = Some(right);
+                }
+            }
+        }
+    }
+    if let Some((start, _)) = open {
+        out.push(start..col.len());
+    }
+    out
 }
 
 /// What makes a reading suspect.
@@ -753,6 +779,23 @@ impl Suspect {
     /// sensor is not fitted on its [`failing_rows`] ([`FAILING_TEMPERATURE`]).
     pub fn fails(&self) -> bool {
         self.kind == SuspectKind::Jump
+    }
+
+    /// A jump's figures in words: "jumps by up to 60.000 K from one reading to the next (2
+    /// times, first at row 101)" (µm for a probe `E_*`).
+    pub fn jumps(&self) -> String {
+        format!(
+            "jumps by up to {:.3} {} from one reading to the next ({} time{}, first at row {})",
+            self.size,
+            if self.column.starts_with("E_") {
+                "µm"
+            } else {
+                "K"
+            },
+            self.count,
+            if self.count == 1 { "" } else { "s" },
+            self.row
+        )
     }
 }
 
@@ -802,28 +845,24 @@ pub fn suspect_readings(
                 .iter()
                 .map(|&k| (col[k] - col[k - 1]).abs())
                 .fold(0.0, f64::max);
-            out.push(Suspect {
+            let mut sp = Suspect {
                 column: name.to_string(),
                 kind: SuspectKind::Jump,
                 row: first + 1,
                 count,
                 size: largest,
-                text: format!(
-                    "{source}: {name} jumps by up to {largest:.3} {unit} from one reading to the next ({count} time{s}, first at row {}), more than {JUMP_FACTOR} times the column's usual fastest change: a sensor fault (an open or loose sensor, a spike)? {what}",
-                    first + 1,
-                    unit = if name.starts_with("E_") { "µm" } else { "K" },
-                    s = if count == 1 { "" } else { "s" },
-                    what = if name.starts_with("E_") {
-                        FAILING_PROBE
-                    } else {
-                        FAILING_TEMPERATURE
-                    },
-                ),
-            });
+                text: String::new(),
+            };
+            sp.text = format!(
+                "{source}: {name} {}, more than {JUMP_FACTOR} times the column's usual fastest change: a sensor fault (an open or loose sensor, a spike)? {}",
+                sp.jumps(),
+                if name.starts_with("E_") { FAILING_PROBE } else { FAILING_TEMPERATURE },
+            );
+            out.push(sp);
         }
         let (row, seconds) = longest_repeat(n, |i| col[i], |i| time[i]);
         // a temperature's repeat inside its failing rows (the rail value of an open sensor)
-        let failing = paired(&jumps, n).iter().any(|r| r.contains(&row));
+        let failing = failing_of(col, &jumps).iter().any(|r| r.contains(&row));
         if seconds >= STUCK_FLOOR_S {
             out.push(Suspect {
                 column: name.to_string(),

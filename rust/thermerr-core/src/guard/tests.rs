@@ -459,5 +459,37 @@ fn a_spike_on_a_short_run_is_seen() {
     y[60] = 9999.0;
     assert_eq!(failing_rows(&y, &t), vec![60..61]);
     let s = suspect_readings("run.csv", &["E_a"], &[&y], &t);
-    assert_eq!((s[0].kind, s[0].row, s[0].count), (SuspectKind::Jump, 61, 2));
+    assert_eq!(
+        (s[0].kind, s[0].row, s[0].count),
+        (SuspectKind::Jump, 61, 2)
+    );
+}
+
+#[test]
+fn a_failing_stretch_ends_only_when_the_column_is_back() {
+    let (t, clean) = warming(960);
+    // a spike that decays over three readings: two jumps down, neither lands back yet
+    let mut y = clean.clone();
+    y[400] += 90.0;
+    y[401] += 45.0;
+    y[402] += 4.0;
+    let f = failing_rows(&y, &t);
+    assert_eq!(f.len(), 1, "{f:?}");
+    assert_eq!(f[0].start, 400);
+    assert!(f[0].end >= 402 && f[0].end <= 403, "{f:?}");
+    // stuck at 85 for a while, back where the machine has gone meanwhile (3 K warmer)
+    let mut y = clean.clone();
+    for v in &mut y[300..420] {
+        *v = 85.0;
+    }
+    for v in &mut y[420..] {
+        *v += 3.0;
+    }
+    assert_eq!(failing_rows(&y, &t), vec![300..420]);
+    // a sensor re-seated 6 K off: it never comes back, failing to the end
+    let mut y = clean.clone();
+    for v in &mut y[700..] {
+        *v += 6.0;
+    }
+    assert_eq!(failing_rows(&y, &t), vec![700..960]);
 }

@@ -355,7 +355,7 @@ fn store_drift(m: &mut Machine, d: usize, coef: &[f64]) {
 }
 
 /// A measured column of a run, and the rows where the run shows it failing
-/// ([`crate::guard::failing_rows`]: from a jump to the next, or to the end), which are neither
+/// ([`crate::guard::failing_rows`]: from a jump away to a jump back, or to the end), which are neither
 /// fitted nor scored. No failing rows is the usual case, and then nothing changes.
 pub struct Reading<'a> {
     pub values: &'a [f64],

@@ -812,12 +812,9 @@ fn failed_columns(
             (
                 sp.column.clone(),
                 format!(
-                    "{}: jumps by up to {:.3} K from one reading to the next ({} time{}, first at row {}): a sensor fault, so neither the room nor a node's sensor, left out of the network (a spare column); drop or mend those rows to use it",
+                    "{}: {}: a sensor fault, so neither the room nor a node's sensor, left out of the network (a spare column); drop or mend those rows to use it",
                     sp.column,
-                    sp.size,
-                    sp.count,
-                    if sp.count == 1 { "" } else { "s" },
-                    sp.row
+                    sp.jumps()
                 ),
             )
         })
