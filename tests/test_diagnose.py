@@ -324,6 +324,33 @@ def test_a_probe_that_fails_is_neither_fitted_nor_scored(cause):
     assert ratio < 1.2, ratio
 
 
+def test_a_probe_that_fails_in_the_held_out_rows_is_scored_where_it_reads(tmp_path, capsys):
+    """The probe unplugged (reading -999 µm) in the held-out part of the run: the held-out figures are
+    over the rows before, and the evidence says over how many. Unplugged before the held-out
+    part starts, there is nothing to score: one line naming the file, the axis and the row,
+    exit 2, nothing written."""
+    c = syn.make_case("vmc", "none", 2, hours=(8.0, 4.0), dt=120.0)
+    nominal = tmp_path / "nominal.toml"
+    nominal.write_text(c.nominal_toml())
+    train = {k: np.array(v, dtype=float) for k, v in c.train.items()}
+    n = len(train["time_s"])
+    split = round(n * 0.7)  # the default held-out fraction: the last 30 %
+    for at, name in ((split + 20, "late.csv"), (split - 20, "early.csv")):
+        run = dict(train, E_z=train["E_z"].copy())
+        run["E_z"][at:] = -999.0
+        syn.write_run_csv(tmp_path / name, run)
+    out = tmp_path / "late"
+    assert main(["diagnose", str(tmp_path / "late.csv"), "--machine", str(nominal), "--out", str(out)]) == 0
+    rep = json.loads((out / "report.json").read_text())
+    assert f"are over 20 of its {n - split} held-out rows: the probe fails on the rest" in rep["evidence"]
+    capsys.readouterr()
+    out = tmp_path / "early"
+    assert main(["diagnose", str(tmp_path / "early.csv"), "--machine", str(nominal), "--out", str(out)]) == 2
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("thermerr: error")]
+    assert len(err) == 1 and "early.csv: E_z fails over all of the held-out rows" in err[0], err
+    assert not out.exists()
+
+
 def test_a_gap_in_the_log_is_said(tmp_path, capsys):
     """The logger off for an hour in the training rows: the command line, report.json and the
     Python warning say where (the row after the gap) and how long, as the time axis's suspect
