@@ -678,6 +678,14 @@ pub fn jump_rows(col: &[f64], time: &[f64]) -> Vec<usize> {
 
 fn jump_rows_at(col: &[f64], time: &[f64], step: f64) -> Vec<usize> {
     let n = time.len();
+    // the limit is never below the floor: a column whose every rate is within it has no jump
+    // (most columns; this pass allocates nothing, and calibrations ask for every sensor's rows)
+    let floor = JUMP_FLOOR / step;
+    if (1..n).all(|i| {
+        (col[i] - col[i - 1]).abs() / (time[i] - time[i - 1]).max(f64::MIN_POSITIVE) <= floor
+    }) {
+        return Vec::new();
+    }
     let rates: Vec<f64> = (1..n)
         .map(|i| (col[i] - col[i - 1]).abs() / (time[i] - time[i - 1]).max(f64::MIN_POSITIVE))
         .collect();
@@ -687,7 +695,7 @@ fn jump_rows_at(col: &[f64], time: &[f64], step: f64) -> Vec<usize> {
     let at =
         (((sorted.len() - 1) as f64 * 0.99).round() as usize).min(sorted.len().saturating_sub(5));
     let (_, &mut q99, _) = sorted.select_nth_unstable_by(at, f64::total_cmp);
-    let limit = (JUMP_FACTOR * q99).max(JUMP_FLOOR / step);
+    let limit = (JUMP_FACTOR * q99).max(floor);
     (1..n).filter(|&i| rates[i - 1] > limit).collect()
 }
 
