@@ -432,7 +432,11 @@ fn a_failing_sensor_is_not_fitted_from_its_jump_to_the_next_or_the_end() {
     assert_eq!(failing_rows(&y, &t), vec![600..960]);
     let s = suspect_readings("run.csv", &["T_a"], &[&y], &t);
     assert_eq!((s[0].kind, s[0].row), (SuspectKind::Jump, 601));
-    assert!(s[0].text.contains("are not fitted"), "{}", s[0].text);
+    assert!(
+        s[0].text.contains("as a node's sensor it is not fitted"),
+        "{}",
+        s[0].text
+    );
     assert_eq!((s[1].kind, s[1].row), (SuspectKind::Repeat, 601));
     assert!(
         s[1].text

@@ -436,11 +436,56 @@ pub fn targets<'a>(m: &Machine, run: &RunView<'a>, axis: &str) -> Result<Targets
             format!("the machine has no drift entry for `{axis}`"),
         )
     })?;
-    Ok(Targets {
+    let mut tg = Targets {
         axis_index,
         error: Reading::of(run.col(axis)?, run.time),
         sensors: sensed(m, run)?,
-    })
+    };
+    // where a temperature that drives the network fails, the model runs on its last right
+    // reading (sim::driving) but what it predicts there is not fitted or scored
+    let unknown = driver_failing(m, run)?;
+    if !unknown.is_empty() {
+        tg.error.failing = union(&tg.error.failing, &unknown);
+        for sn in tg.sensors.iter_mut() {
+            sn.reading.failing = union(&sn.reading.failing, &unknown);
+        }
+    }
+    Ok(tg)
+}
+
+/// The failing rows ([`crate::guard::failing_rows`]) of the columns that drive the network:
+/// the room and the boundary nodes.
+pub fn driver_failing(m: &Machine, run: &RunView<'_>) -> Result<Vec<std::ops::Range<usize>>> {
+    let mut cols: Vec<&str> = m
+        .nodes
+        .iter()
+        .filter_map(|n| n.boundary.as_deref())
+        .collect();
+    if let super::machine::Ambient::Column(c) = &m.ambient {
+        cols.push(c);
+    }
+    let mut out = Vec::new();
+    for c in cols {
+        out = union(&out, &crate::guard::failing_rows(run.col(c)?, run.time));
+    }
+    Ok(out)
+}
+
+/// The union of two sets of row ranges, as ordered, disjoint ranges.
+fn union(
+    a: &[std::ops::Range<usize>],
+    b: &[std::ops::Range<usize>],
+) -> Vec<std::ops::Range<usize>> {
+    let mut all: Vec<std::ops::Range<usize>> = a.iter().chain(b).cloned().collect();
+    all.sort_by_key(|r| r.start);
+    let mut out: Vec<std::ops::Range<usize>> = Vec::new();
+    for r in all {
+        match out.last_mut() {
+            Some(last) if r.start <= last.end => last.end = last.end.max(r.end),
+            _ => out.push(r),
+        }
+    }
+    out
 }
 
 /// Simulates `m` and returns (simulation with fitted drift, normalised data residuals over
@@ -776,4 +821,24 @@ pub fn fit_initial_offsets(m: &Machine, run: &RunView<'_>, window: usize) -> Res
         off[sj.node] = v.clamp(-2.0, 2.0);
     }
     Ok(off)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn failing_rows_join_into_disjoint_ranges() {
+        assert_eq!(
+            union(&[5..9, 20..25], &[1..3, 8..12, 25..30]),
+            vec![1..3, 5..12, 20..30]
+        );
+        assert_eq!(union(&[], &[4..6]), vec![4..6]);
+        let r = Reading {
+            values: &[0.0; 40],
+            failing: vec![5..12, 20..30],
+        };
+        assert_eq!(r.fitted_rows(25), 25 - 7 - 5);
+        assert!(r.reads(4) && !r.reads(5) && !r.reads(11) && r.reads(12));
+    }
 }

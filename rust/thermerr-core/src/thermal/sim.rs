@@ -191,9 +191,28 @@ pub enum Init {
 
 fn ambient_series<'a>(mach: &Machine, run: &RunView<'a>) -> Result<std::borrow::Cow<'a, [f64]>> {
     Ok(match &mach.ambient {
-        Ambient::Column(c) => std::borrow::Cow::Borrowed(run.col(c)?),
+        Ambient::Column(c) => driving(run, c)?,
         Ambient::Constant(v) => std::borrow::Cow::Owned(vec![*v; run.len()]),
     })
+}
+
+/// A temperature column that drives the network (the room, a boundary node), with each
+/// stretch where the run shows its sensor failing ([`crate::guard::failing_rows`]: an open
+/// thermocouple at its rail, a spike) held at the last right reading before it: the model is
+/// driven across it as across a gap in the log. A column that never fails is borrowed as is.
+pub fn driving<'a>(run: &RunView<'a>, c: &str) -> Result<std::borrow::Cow<'a, [f64]>> {
+    let col = run.col(c)?;
+    let failing = crate::guard::failing_rows(col, run.time);
+    if failing.is_empty() {
+        return Ok(std::borrow::Cow::Borrowed(col));
+    }
+    let mut held = col.to_vec();
+    for r in failing {
+        // a stretch starts at a jump, so never at row 0
+        let last = col[r.start.saturating_sub(1)];
+        held[r].fill(last);
+    }
+    Ok(std::borrow::Cow::Owned(held))
 }
 
 /// Every `k`-th row of a run, owned (see [`crate::thermal::calibrate::FIT_STEP_S`]).
@@ -332,11 +351,12 @@ pub fn simulate_nodes_on(
     let net = network(mach);
     let nd = net.dyn_nodes.len();
     let amb = ambient_series(mach, run)?;
-    let bnd: Vec<Option<&[f64]>> = mach
+    let bnd_held: Vec<Option<std::borrow::Cow<'_, [f64]>>> = mach
         .nodes
         .iter()
-        .map(|n| n.boundary.as_deref().map(|c| run.col(c)).transpose())
+        .map(|n| n.boundary.as_deref().map(|c| driving(run, c)).transpose())
         .collect::<Result<_>>()?;
+    let bnd: Vec<Option<&[f64]>> = bnd_held.iter().map(|b| b.as_deref()).collect();
     let srcs: Vec<(usize, &[f64], f64, f64, f64)> = mach
         .sources
         .iter()

@@ -45,7 +45,6 @@ pub use verdict::Verdict;
 
 use super::calibrate::{
     calibrate, default_params, evaluate, targets, Calibration, CalibrationOptions, FreeParam,
-    Reading,
 };
 use super::machine::{Identified, Machine};
 use super::sim::RunView;
@@ -852,14 +851,14 @@ fn diagnose_on(
         &base_hold,
         &axis,
     ));
-    let probe = Reading::of(held.run.col(&axis)?, held.run.time);
+    let probe = targets(&baseline.machine, held.run, &axis)?.error;
     let n_held = held.run.len() - held.from;
     let scored = (held.from..held.run.len())
         .filter(|&k| probe.reads(k))
         .count();
     if scored < n_held {
         evidence.push_str(&format!(
-            " The held-out figures of {axis} are over {scored} of its {n_held} held-out rows: the probe fails on the rest (its suspect reading), and they are not scored."
+            " The held-out figures of {axis} are over {scored} of its {n_held} held-out rows: on the rest the probe, the room or a boundary fails (their suspect readings), and they are not scored."
         ));
     }
     let (holdout_label, holdout_time, holdout_measured) = match hold {

@@ -57,7 +57,7 @@ pub(super) fn holdout(cal: &Calibration, held: &HeldOut<'_, '_>) -> Result<Holdo
             let rows: Vec<usize> = (from..run.len()).filter(|&k| tg.error.reads(k)).collect();
             if rows.is_empty() {
                 return Err(Error::Shape(format!(
-                    "{}: {} fails over all of the held-out rows (from row {}): nothing to score it on; mend those rows, or diagnose the other axes alone (--axis, or axes= in Python)",
+                    "{}: no held-out row of {} can be scored (from row {}): the probe, the room or a boundary fails over all of them; mend those rows, or diagnose the other axes alone (--axis, or axes= in Python)",
                     run.source,
                     held.axis,
                     from + 1
