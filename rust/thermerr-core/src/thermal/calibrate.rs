@@ -364,11 +364,12 @@ pub struct Reading<'a> {
 }
 
 impl<'a> Reading<'a> {
-    pub fn of(values: &'a [f64], time: &[f64]) -> Self {
-        Reading {
-            values,
-            failing: crate::guard::failing_rows(values, time),
-        }
+    /// Column `name` of `run`, with its failing rows ([`RunView::failing`]).
+    pub fn of(run: &RunView<'a>, name: &str) -> Result<Self> {
+        Ok(Reading {
+            values: run.col(name)?,
+            failing: run.failing(name)?.to_vec(),
+        })
     }
 
     /// Whether row `k` is fitted and scored.
@@ -413,7 +414,7 @@ pub fn sensed<'a>(m: &Machine, run: &RunView<'a>) -> Result<Vec<Sensed<'a>>> {
         if let (Some(c), None) = (&n.sensor, &n.boundary) {
             out.push(Sensed {
                 node: i,
-                reading: Reading::of(run.col(c)?, run.time),
+                reading: Reading::of(run, c)?,
             });
         }
     }
@@ -438,7 +439,7 @@ pub fn targets<'a>(m: &Machine, run: &RunView<'a>, axis: &str) -> Result<Targets
     })?;
     let mut tg = Targets {
         axis_index,
-        error: Reading::of(run.col(axis)?, run.time),
+        error: Reading::of(run, axis)?,
         sensors: sensed(m, run)?,
     };
     // where a temperature that drives the network fails, the model runs on its last right
@@ -466,7 +467,7 @@ pub fn driver_failing(m: &Machine, run: &RunView<'_>) -> Result<Vec<std::ops::Ra
     }
     let mut out = Vec::new();
     for c in cols {
-        out = union(&out, &crate::guard::failing_rows(run.col(c)?, run.time));
+        out = union(&out, &run.failing(c)?);
     }
     Ok(out)
 }

@@ -1447,7 +1447,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let mut drift = Vec::new();
     for ax in &ck.axes {
         // a failing probe's rows (a spike, a probe that stops) are not fitted
-        let e = Reading::of(view.col(ax)?, view.time);
+        let e = Reading::of(&view, ax)?;
         let (coef, _) = if e.failing.is_empty() {
             fit(&node_rises, &e.values[..m])?
         } else {
@@ -1588,7 +1588,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let mut axes = Vec::new();
     for (ax, pred) in &sim.drift {
         // a failing probe's rows are not scored
-        let e = Reading::of(view.col(ax)?, view.time);
+        let e = Reading::of(&view, ax)?;
         let err = |rows: std::ops::Range<usize>| {
             rms(rows.filter(|&i| e.reads(i)).map(|i| pred[i] - e.values[i]))
         };

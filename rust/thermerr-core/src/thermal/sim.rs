@@ -5,6 +5,7 @@
 //! length.
 
 use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 
 use nalgebra::DMatrix;
 
@@ -13,11 +14,17 @@ use crate::error::{Error, Result};
 use crate::portable;
 use crate::run::Run;
 
+/// A column's failing rows ([`crate::guard::failing_rows`]).
+pub type Failing = Arc<Vec<std::ops::Range<usize>>>;
+
 /// Named columns of a run, borrowed.
 pub struct RunView<'a> {
     pub source: String,
     pub time: &'a [f64],
     cols: HashMap<&'a str, &'a [f64]>,
+    /// Each column's failing rows, found once per view: a calibration simulates its view
+    /// thousands of times, and each simulation holds the failing stretches of the room.
+    failing: Mutex<HashMap<String, Failing>>,
 }
 
 impl<'a> RunView<'a> {
@@ -31,7 +38,20 @@ impl<'a> RunView<'a> {
                 .zip(&run.columns)
                 .map(|(n, c)| (n.as_str(), c.as_slice()))
                 .collect(),
+            failing: Mutex::default(),
         }
+    }
+
+    /// The rows of column `name` where the run shows its sensor failing
+    /// ([`crate::guard::failing_rows`]), computed on first use and kept with the view.
+    pub fn failing(&self, name: &str) -> Result<Failing> {
+        let lock = || self.failing.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(f) = lock().get(name) {
+            return Ok(f.clone());
+        }
+        let f: Failing = Arc::new(crate::guard::failing_rows(self.col(name)?, self.time));
+        lock().insert(name.to_string(), f.clone());
+        Ok(f)
     }
 
     pub fn col(&self, name: &str) -> Result<&'a [f64]> {
@@ -79,6 +99,7 @@ impl<'a> RunView<'a> {
             source: self.source.clone(),
             time: &self.time[..rows],
             cols: self.cols.iter().map(|(n, c)| (*n, &c[..rows])).collect(),
+            failing: Mutex::default(),
         }
     }
 }
@@ -202,12 +223,12 @@ fn ambient_series<'a>(mach: &Machine, run: &RunView<'a>) -> Result<std::borrow::
 /// driven across it as across a gap in the log. A column that never fails is borrowed as is.
 pub fn driving<'a>(run: &RunView<'a>, c: &str) -> Result<std::borrow::Cow<'a, [f64]>> {
     let col = run.col(c)?;
-    let failing = crate::guard::failing_rows(col, run.time);
+    let failing = run.failing(c)?;
     if failing.is_empty() {
         return Ok(std::borrow::Cow::Borrowed(col));
     }
     let mut held = col.to_vec();
-    for r in failing {
+    for r in failing.iter().cloned() {
         // a stretch starts at a jump, so never at row 0
         let last = col[r.start.saturating_sub(1)];
         held[r].fill(last);
@@ -246,6 +267,7 @@ impl Thinned {
                 .iter()
                 .map(|(n, c)| (n.as_str(), c.as_slice()))
                 .collect(),
+            failing: Mutex::default(),
         }
     }
 }
