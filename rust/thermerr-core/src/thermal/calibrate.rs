@@ -299,15 +299,9 @@ fn fit_drift(
         lstsq_with_prior(&cols, measured, rows, sigma_e, &prior)?
     } else {
         // a failing probe: the fitted rows only
-        let keep = |v: &[f64]| -> Vec<f64> {
-            (0..rows)
-                .filter(|&k| error.reads(k))
-                .map(|k| v[k])
-                .collect()
-        };
-        let kept: Vec<Vec<f64>> = basis.iter().map(|b| keep(b)).collect();
+        let kept: Vec<Vec<f64>> = basis.iter().map(|b| error.kept(b, rows)).collect();
         let cols: Vec<&[f64]> = kept.iter().map(Vec::as_slice).collect();
-        let y = keep(measured);
+        let y = error.kept(measured, rows);
         lstsq_with_prior(&cols, &y, y.len(), sigma_e, &prior)?
     };
     let mut fitted = vec![0.0; measured.len()];
@@ -386,16 +380,18 @@ impl<'a> Reading<'a> {
             .sum::<usize>()
     }
 
+    /// The values of `v` (a series of the run's rows) on the fitted rows among the first
+    /// `rows`.
+    pub fn kept(&self, v: &[f64], rows: usize) -> Vec<f64> {
+        (0..rows).filter(|&k| self.reads(k)).map(|k| v[k]).collect()
+    }
+
     /// The noise level ([`noise_level`]) of the fitted rows among the first `rows`.
     pub fn noise(&self, rows: usize) -> f64 {
         if self.failing.is_empty() {
             return noise_level(&self.values[..rows]);
         }
-        let kept: Vec<f64> = (0..rows)
-            .filter(|&k| self.reads(k))
-            .map(|k| self.values[k])
-            .collect();
-        noise_level(&kept)
+        noise_level(&self.kept(self.values, rows))
     }
 }
 

@@ -1451,10 +1451,8 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         let (coef, _) = if e.failing.is_empty() {
             fit(&node_rises, &e.values[..m])?
         } else {
-            let keep =
-                |v: &[f64]| -> Vec<f64> { (0..m).filter(|&k| e.reads(k)).map(|k| v[k]).collect() };
-            let rises: Vec<Vec<f64>> = node_rises.iter().map(|r| keep(r)).collect();
-            fit(&rises, &keep(e.values))?
+            let rises: Vec<Vec<f64>> = node_rises.iter().map(|r| e.kept(r, m)).collect();
+            fit(&rises, &e.kept(e.values, m))?
         };
         drift.push(DriftSpec {
             axis: ax.clone(),
