@@ -415,3 +415,60 @@ fn a_bic_step_stops_a_misfit_calibration_sooner_and_costs_it_little() {
         .to_string();
     assert!(err.contains("min_bic_step"), "{err}");
 }
+
+const COOLED: &str = r#"
+name = "cooled"
+ambient = "T_ambient"
+[[nodes]]
+name = "a"
+capacity_j_per_k = 1000.0
+ambient_w_per_k = 2.0
+sensor = "T_a"
+[[nodes]]
+name = "coolant"
+capacity_j_per_k = 1.0
+ambient_w_per_k = 0.0
+boundary = "T_cool"
+[[links]]
+between = ["a", "coolant"]
+w_per_k = 3.0
+[[drift]]
+axis = "E_z"
+um_per_k = { a = 3.0 }
+"#;
+
+/// A room or boundary sensor that fails (an open thermocouple at -200 °C) drives the network
+/// at its last right reading over its failing rows, as a run whose reading stayed there would.
+#[test]
+fn a_failing_room_or_boundary_sensor_is_held_at_its_last_right_reading() {
+    let m = Machine::from_toml(COOLED, "cooled.toml").unwrap();
+    let n = 400;
+    let t: Vec<f64> = (0..n).map(|k| 60.0 * k as f64).collect();
+    let room: Vec<f64> = t.iter().map(|s| 20.0 + (s / 7200.0).sin()).collect();
+    let cool: Vec<f64> = t.iter().map(|s| 18.0 + 0.5 * (s / 3000.0).cos()).collect();
+    let sim = |room: &[f64], cool: &[f64]| {
+        let r = run(vec![
+            ("time_s", t.clone()),
+            ("T_ambient", room.to_vec()),
+            ("T_cool", cool.to_vec()),
+            ("T_a", vec![20.0; n]),
+            ("E_z", vec![0.0; n]),
+        ]);
+        simulate(&m, &RunView::new(&r), &Init::FirstReading)
+            .unwrap()
+            .temps
+    };
+    let (mut room_bad, mut cool_bad) = (room.clone(), cool.clone());
+    let (mut room_held, mut cool_held) = (room.clone(), cool.clone());
+    for k in 150..n {
+        room_bad[k] = -200.0; // open to the end
+        room_held[k] = room[149];
+    }
+    for k in 250..300 {
+        cool_bad[k] = 850.0; // stuck at its rail for 50 readings, then back
+        cool_held[k] = cool[249];
+    }
+    let failed = sim(&room_bad, &cool_bad);
+    assert_eq!(failed, sim(&room_held, &cool_held));
+    assert_ne!(failed, sim(&room, &cool));
+}
