@@ -830,7 +830,7 @@ mod tests {
             union(&[5..9, 20..25], &[1..3, 8..12, 25..30]),
             vec![1..3, 5..12, 20..30]
         );
-        assert_eq!(union(&[], &[4..6]), vec![4..6]);
+        assert_eq!(union(&[], &[4..6, 8..9]), vec![4..6, 8..9]);
         let r = Reading {
             values: &[0.0; 40],
             failing: vec![5..12, 20..30],
