@@ -299,9 +299,9 @@ fn fit_drift(
         lstsq_with_prior(&cols, measured, rows, sigma_e, &prior)?
     } else {
         // a failing probe: the fitted rows only
-        let kept: Vec<Vec<f64>> = basis.iter().map(|b| error.kept(b, rows)).collect();
+        let kept: Vec<Vec<f64>> = basis.iter().map(|b| error.kept(b, 0..rows)).collect();
         let cols: Vec<&[f64]> = kept.iter().map(Vec::as_slice).collect();
-        let y = error.kept(measured, rows);
+        let y = error.kept(measured, 0..rows);
         lstsq_with_prior(&cols, &y, y.len(), sigma_e, &prior)?
     };
     let mut fitted = vec![0.0; measured.len()];
@@ -380,10 +380,9 @@ impl<'a> Reading<'a> {
             .sum::<usize>()
     }
 
-    /// The values of `v` (a series of the run's rows) on the fitted rows among the first
-    /// `rows`.
-    pub fn kept(&self, v: &[f64], rows: usize) -> Vec<f64> {
-        (0..rows).filter(|&k| self.reads(k)).map(|k| v[k]).collect()
+    /// The values of `v` (a series of the run's rows) on the fitted rows among `rows`.
+    pub fn kept(&self, v: &[f64], rows: std::ops::Range<usize>) -> Vec<f64> {
+        rows.filter(|&k| self.reads(k)).map(|k| v[k]).collect()
     }
 
     /// The noise level ([`noise_level`]) of the fitted rows among the first `rows`.
@@ -391,7 +390,7 @@ impl<'a> Reading<'a> {
         if self.failing.is_empty() {
             return noise_level(&self.values[..rows]);
         }
-        noise_level(&self.kept(self.values, rows))
+        noise_level(&self.kept(self.values, 0..rows))
     }
 }
 

@@ -1451,8 +1451,8 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         let (coef, _) = if e.failing.is_empty() {
             fit(&node_rises, &e.values[..m])?
         } else {
-            let rises: Vec<Vec<f64>> = node_rises.iter().map(|r| e.kept(r, m)).collect();
-            fit(&rises, &e.kept(e.values, m))?
+            let rises: Vec<Vec<f64>> = node_rises.iter().map(|r| e.kept(r, 0..m)).collect();
+            fit(&rises, &e.kept(e.values, 0..m))?
         };
         drift.push(DriftSpec {
             axis: ax.clone(),

@@ -54,8 +54,11 @@ pub(super) fn holdout(cal: &Calibration, held: &HeldOut<'_, '_>) -> Result<Holdo
     let fig = match tg.error.failing.is_empty() {
         true => metrics::scores(&y[from..], &e[from..], None)?,
         false => {
-            let rows: Vec<usize> = (from..run.len()).filter(|&k| tg.error.reads(k)).collect();
-            if rows.is_empty() {
+            let (y_kept, e_kept) = (
+                tg.error.kept(y, from..run.len()),
+                tg.error.kept(e, from..run.len()),
+            );
+            if y_kept.is_empty() {
                 return Err(Error::Shape(format!(
                     "{}: no held-out row of {} can be scored (from row {}): the probe, the room or a boundary fails over all of them; mend those rows, or diagnose the other axes alone (--axis, or axes= in Python)",
                     run.source,
@@ -63,8 +66,7 @@ pub(super) fn holdout(cal: &Calibration, held: &HeldOut<'_, '_>) -> Result<Holdo
                     from + 1
                 )));
             }
-            let pick = |v: &[f64]| -> Vec<f64> { rows.iter().map(|&k| v[k]).collect() };
-            metrics::scores(&pick(y), &pick(e), None)?
+            metrics::scores(&y_kept, &e_kept, None)?
         }
     };
     let mut joint: f64 = (from..run.len())
