@@ -603,7 +603,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     def common(sp: argparse.ArgumentParser) -> None:
         sp.add_argument("--nan", choices=["error", "drop", "interpolate"], default="error",
-                        help="what to do with missing values in the run (default: error)")
+                        help="missing values in the run: refuse them (error, the default), fill each "
+                             "linearly in time (interpolate: the choice for the thermal network), or "
+                             "remove their rows (drop: one blank cell takes the whole row)")
         sp.add_argument("--delimiter", type=_delimiter, default=",",
                         help="field separator of the run CSVs: ',' (default), ';', 'tab', ...")
         sp.add_argument("--quiet", action="store_true", help="no progress or chatter (the results are still printed; --json prints only them)")

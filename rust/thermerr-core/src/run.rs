@@ -302,7 +302,7 @@ impl Run {
                             return Err(at(
                                 i,
                                 name,
-                                "missing value (to accept gaps: nan=\"drop\" or \"interpolate\"; --nan on the command line)"
+                                "missing value (to accept gaps: nan=\"interpolate\" fills each linearly in time, nan=\"drop\" removes its row; --nan on the command line)"
                                     .into(),
                             ));
                         }

@@ -11,6 +11,8 @@ use crate::thermal::calibrate::{
 use crate::thermal::machine::{Ambient, InputTerm, LinkSpec, Machine, NodeSpec};
 use crate::thermal::sim::RunView;
 use serde::Serialize;
+use std::collections::HashMap;
+use std::sync::Mutex;
 
 /// One extension before fitting: the extended machine and its extra free parameters.
 #[derive(Clone, Debug)]
@@ -236,9 +238,36 @@ pub(super) struct Baseline<'a> {
     /// Calibration options of the extensions (the baseline's noise levels).
     pub options: CalibrationOptions,
     pub axis_index: usize,
-    /// [`node_sensor_mate`] by column, worked out once per baseline: every unmodelled-source
-    /// candidate on a column (screened, then fitted in full) has the same node sensors.
-    pub mate_of: std::sync::Mutex<std::collections::HashMap<String, Option<String>>>,
+    /// [`node_sensor_mate`], worked out once per diagnosis.
+    pub mates: &'a MateMemo,
+}
+
+/// [`node_sensor_mate`] by column, kept for a whole diagnosis: every unmodelled-source candidate
+/// on a column (screened, then fitted in full, in every round of every axis) asks it again of
+/// the same training rows. The key holds everything the answer depends on besides the view: the
+/// column, the node sensors, the fitted rows and the ambient.
+#[derive(Default)]
+pub struct MateMemo(Mutex<HashMap<MateKey, Option<String>>>);
+
+type MateKey = (String, Vec<String>, usize, String);
+
+impl MateMemo {
+    /// [`node_sensor_mate`] of `col` on machine `m`, from the memo when it was asked before.
+    fn get(&self, m: &Machine, train: &RunView<'_>, rows: usize, col: &str) -> Option<String> {
+        let sensors = m.nodes.iter().filter_map(|n| n.sensor.clone()).collect();
+        let ambient = match &m.ambient {
+            Ambient::Column(c) => c.clone(),
+            Ambient::Constant(v) => format!("{:x}", v.to_bits()),
+        };
+        let key = (col.to_string(), sensors, rows, ambient);
+        let lock = || self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(v) = lock().get(&key) {
+            return v.clone();
+        }
+        let v = node_sensor_mate(m, train, rows, col);
+        lock().insert(key, v.clone());
+        v
+    }
 }
 
 impl<'a> Baseline<'a> {
@@ -247,26 +276,15 @@ impl<'a> Baseline<'a> {
         holdout: &'a Holdout,
         options: CalibrationOptions,
         axis_index: usize,
+        mates: &'a MateMemo,
     ) -> Self {
         Baseline {
             calibration,
             holdout,
             options,
             axis_index,
-            mate_of: Default::default(),
+            mates,
         }
-    }
-
-    /// [`node_sensor_mate`] of `col` on machine `m` (which has the baseline's node sensors).
-    fn mate_of(&self, m: &Machine, train: &RunView<'_>, rows: usize, col: &str) -> Option<String> {
-        let cached = self.mate_of.lock().ok().and_then(|c| c.get(col).cloned());
-        cached.unwrap_or_else(|| {
-            let v = node_sensor_mate(m, train, rows, col);
-            if let Ok(mut c) = self.mate_of.lock() {
-                c.insert(col.to_string(), v.clone());
-            }
-            v
-        })
     }
 }
 
@@ -502,7 +520,7 @@ fn scored(
     };
     let rows = base.options.fit_rows.unwrap_or(train.len());
     let mate_of = match (spec.cause, &spec.column) {
-        (Cause::UnmodeledSource, Some(col)) => base.mate_of(&spec.machine, train, rows, col),
+        (Cause::UnmodeledSource, Some(col)) => base.mates.get(&spec.machine, train, rows, col),
         _ => None,
     };
     let mates = match (spec.cause, &spec.column, &spec.node) {

@@ -52,7 +52,7 @@ use crate::error::{Error, Result};
 use crate::guard::{suspect_readings, Suspect};
 use crate::portable;
 use crate::progress::{self, Progress};
-use candidates::{Baseline, Spec};
+use candidates::{Baseline, MateMemo, Spec};
 use score::HeldOut;
 use std::sync::Arc;
 
@@ -692,7 +692,7 @@ pub fn diagnose(
     hold: Option<&RunView<'_>>,
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis> {
-    diagnose_on(m, None, train, hold, opts)
+    diagnose_on(m, None, train, hold, opts, &MateMemo::default())
 }
 
 /// The training rows of a diagnosis: all of `train` when a separate held-out run is given,
@@ -716,6 +716,7 @@ fn diagnose_on(
     train: &RunView<'_>,
     hold: Option<&RunView<'_>>,
     opts: &DiagnoseOptions,
+    mates: &MateMemo,
 ) -> Result<Diagnosis> {
     let axis = match &opts.axis {
         Some(a) => a.clone(),
@@ -770,6 +771,7 @@ fn diagnose_on(
             ..copts
         },
         axis_index,
+        mates,
     );
     // extensions are built on the nominal machine, so that bounds and priors are the baseline's
     // (centred on the user's estimate); the search starts from the calibrated values
@@ -963,13 +965,15 @@ pub fn diagnose_axes(
         }
         _ => None,
     };
+    // the axes share the training rows, the network's sensors and the ambient
+    let mates = MateMemo::default();
     axes.par_iter()
         .map(|a| {
             let o = DiagnoseOptions {
                 axis: Some(a.clone()),
                 ..opts.clone()
             };
-            diagnose_on(m, shared.as_ref(), train, hold, &o)
+            diagnose_on(m, shared.as_ref(), train, hold, &o, &mates)
         })
         .collect()
 }

@@ -264,6 +264,7 @@ where
             &cur.holdout,
             base.options.clone(),
             axis_index,
+            base.mates,
         );
         let cands = fit_round(&spec.machine, &b, &carried, &taken)?;
         let best = cands.iter().position(supported);
@@ -303,6 +304,7 @@ where
                     &joint.holdout,
                     base.options.clone(),
                     axis_index,
+                    base.mates,
                 );
                 let reduced = candidates::fit(Spec { extra, ..spec }, &b, cx.train, cx.held, None);
                 progress::step(opts.progress.as_deref());
