@@ -106,6 +106,34 @@ def test_fit_sequential_and_network_models(model, tmp_path, capsys):
     m = tr.load_model(out)
     assert m.kind == model and np.isfinite(report["train"]["rms"])
     assert main(["evaluate", str(out), str(EXAMPLES / "lathe_run.csv"), "--json"]) == 0
+    evaluated = json.loads(capsys.readouterr().out)
+    # a model fed its own previous outputs is scored closed loop, and one step ahead too (the
+    # measured error of the step before given): the same numbers as the Python API's
+    if model == "bp":
+        assert "train_one_step" not in report and "one_step" not in evaluated
+        return
+    run = tr.read_run(EXAMPLES / "lathe_run.csv")
+    one = tr.scores(run["E_x"], m.predict_run(run, one_step=True)).as_dict()
+    closed = tr.scores(run["E_x"], m.predict_run(run)).as_dict()
+    assert report["train_one_step"]["rms"] == one["rms"] and report["train"]["rms"] == closed["rms"]
+    assert evaluated["one_step"]["rms"] == one["rms"] and evaluated["rms"] == closed["rms"]
+    assert one["rms"] != closed["rms"]
+
+
+def test_a_sequence_model_says_how_it_was_scored_and_when_closed_loop_stands_still(tmp_path, capsys):
+    """GM(1,N) alone, closed loop from a run's zero error, predicts that zero throughout
+    (docs/methods.md): the command says so beside the figures, and gives the one-step ones."""
+    from conftest import EXAMPLES
+
+    out = tmp_path / "gm.json"
+    assert main(["fit", str(EXAMPLES / "lathe_run.csv"), "--axis", "E_x", "--model", "gm1n", "--no-guard",
+                 "--sensors", "T_coolant,T_headstock,T_x_nut", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "training run (closed loop: the model's own previous outputs fill its history" in text
+    assert "training run, one step ahead: the measured error of the step before is given" in text
+    assert "note: closed loop, the model predicts 0 µm on every sample of" in text
+    run = tr.read_run(EXAMPLES / "lathe_run.csv")
+    assert not np.any(tr.load_model(out).predict_run(run))
 
 
 def test_examples_are_shipped_with_the_package(tmp_path):

@@ -231,6 +231,41 @@ def _print_scores(args: argparse.Namespace, title: str, s: Scores) -> None:
     print("  " + str(s).replace("\n", "\n  "))
 
 
+#: how the figures of a model fed its own previous outputs were taken (the grey and hybrid models)
+CLOSED_LOOP = "closed loop: the model's own previous outputs fill its history, as on a gateway without a probe"
+ONE_STEP = ("one step ahead: the measured error of the step before is given, as with a probe on the machine "
+            "(seed 002's protocol)")
+
+
+def _one_step(args: argparse.Namespace, title: str, model: Any, run: Run, target: str,
+              closed: Any, after: Run | None = None) -> Scores | None:
+    """A model whose prediction feeds on the errors before it (GM(1,N), GM+BP, the hybrid filter
+    network) is scored closed loop by default; its one-step-ahead figures are printed too (and
+    returned), with a note when closed loop it never leaves one value (a rolling GM started from
+    the run's zero error keeps predicting it). ``None`` for any other model, or when ``target``
+    is not the column the model was fitted to (its one-step history is that column)."""
+    from .grey import _Sequential
+
+    if not isinstance(model, _Sequential) or target != getattr(model, "target_name_", None):
+        return None
+    import numpy as np
+
+    closed = np.asarray(closed)
+    if closed.size and np.ptp(closed) == 0.0:
+        _say(args, f"note: closed loop, the model predicts {float(closed[0]):.4g} µm on every sample of "
+                   f"{run.source}: fed its own outputs from the start, its history never leaves that value "
+                   "(the one-step figures below are what it does with the measured errors)")
+    s = scores(run[target], model.predict_run(run, one_step=True, after=after))
+    _print_scores(args, f"{title}, {ONE_STEP}", s)
+    if s.rms > s.rms_measured:
+        why = (": a rolling GM(1,N) fitted to a few samples of slowly changing temperatures is a near-singular "
+               "system whose time response can grow without bound (docs/methods.md, GM(1,N))"
+               if getattr(model, "kind", "") in ("gm1n", "greybp") else "")
+        _say(args, f"note: even one step ahead the model is worse than no compensation on {run.source} "
+                   f"(RMS {s.rms:.4g} µm against {s.rms_measured:.4g} µm){why}; compare --model mlr, rbf or svr")
+    return s
+
+
 def cmd_fit(args: argparse.Namespace) -> int:
     _check_out(args.out, args.run, args.test)
     run = _read(args, args.run)
@@ -282,9 +317,16 @@ def cmd_fit(args: argparse.Namespace) -> int:
     report: dict[str, Any] = {"model": name, "axis": args.axis, "sensors": sensors}
     if selection is not None:
         report["selection"] = selection.to_dict()
-    train = scores(run[args.axis], model.predict_run(run))
+    closed = model.predict_run(run)
+    train = scores(run[args.axis], closed)
     report["train"] = train.as_dict()
-    _print_scores(args, "training run", train)
+    from .grey import _Sequential
+
+    loop = f" ({CLOSED_LOOP})" if isinstance(model, _Sequential) else ""
+    _print_scores(args, f"training run{loop}", train)
+    one = _one_step(args, "training run", model, run, args.axis, closed)
+    if one is not None:
+        report["train_one_step"] = one.as_dict()
     if args.test:
         test_run = _read(args, args.test)
         after = None
@@ -295,10 +337,14 @@ def cmd_fit(args: argparse.Namespace) -> int:
                    f"its clock starts {test_run.time_s[0] - run.time_s[-1]:g} s after the training run's last sample")
             _say(args, f"{test_run.source} continues {run.source} ({why}): predicted from the training run's "
                        "start, as a gateway running since then (rises and history go on through the join)")
-        held = scores(test_run[args.axis], model.predict_run(test_run, after=after))
+        closed = model.predict_run(test_run, after=after)
+        held = scores(test_run[args.axis], closed)
         report["test"] = held.as_dict()
         report["test_continues_training"] = after is not None
-        _print_scores(args, f"held-out run {test_run.source}", held)
+        _print_scores(args, f"held-out run {test_run.source}{loop}", held)
+        one = _one_step(args, f"held-out run {test_run.source}", model, test_run, args.axis, closed, after)
+        if one is not None:
+            report["test_one_step"] = one.as_dict()
     if not args.no_guard:
         from .guard import add_guard
 
@@ -340,15 +386,21 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if after is not None and not run.continues(after):
         _say(args, f"note: {run.source}'s clock does not go on from {after.source}'s: it is moved to start one "
                    "sampling step after it")
-    s = scores(run[target], model.predict_run(run, after=after))
-    if args.json:
-        _print_json({"axis": target, **s.as_dict(), "after": args.after})
-    else:
+    from .grey import _Sequential
+
+    closed = model.predict_run(run, after=after)
+    s = scores(run[target], closed)
+    if not args.json:
         wrapped = getattr(model, "estimator", None)  # the model inside a preprocessing wrapper
         inner = wrapped if isinstance(wrapped, Estimator) else model
         pre = f" ({type(model).__name__})" if inner is not model else ""
-        print(f"{inner.kind} model{pre} {args.model} on {run.source}, axis {target}:")
+        loop = f" ({CLOSED_LOOP})" if isinstance(model, _Sequential) else ""
+        print(f"{inner.kind} model{pre} {args.model} on {run.source}, axis {target}{loop}:")
         print("  " + str(s).replace("\n", "\n  "))
+    one = _one_step(args, f"{run.source}, axis {target}", model, run, target, closed, after)
+    if args.json:
+        extra = {} if one is None else {"one_step": one.as_dict()}
+        _print_json({"axis": target, **s.as_dict(), "after": args.after, **extra})
     return 0
 
 
