@@ -353,6 +353,7 @@ class BpModel:
         patience: int | None = None,
         init: float | None = None,
         seed: int | None = None,
+        large_n: int | None = None,  # rows from which Adam takes the large-n rule; 0: never
     ) -> BpModel: ...
     def predict(self, x: _F64) -> _F64: ...
     @property

@@ -146,14 +146,15 @@ class GM1N(_Sequential):
 class BPNetwork(Regressor):
     """A BP network regressor on the temperatures (seed 002's "BP" baseline): inputs and error
     min–max scaled by the training ranges, ``hidden`` sigmoid units (a list for several layers),
-    linear output; trainers as in :class:`GreyBP`."""
+    linear output; trainers and the large-n rule (``large_n``, 2000 rows by default) as in
+    :class:`GreyBP`."""
 
     kind = "bp"
     _inner: _core.BpModel | None = None
 
     def __init__(self, *, hidden: int | list[int] = 7, trainer: str = "adam", lr: float = 0.01,
                  momentum: float = 0.9, max_epochs: int = 8000, goal: float | None = None,
-                 patience: int = 500, seed: int = 0) -> None:
+                 patience: int = 500, seed: int = 0, large_n: int | None = 2000) -> None:
         self.hidden = hidden
         self.trainer = trainer
         self.lr = lr
@@ -162,10 +163,11 @@ class BPNetwork(Regressor):
         self.goal = goal
         self.patience = patience
         self.seed = seed
+        self.large_n = large_n
 
     def _fit(self, x: F64, y: F64) -> None:
         hidden = [int(self.hidden)] if isinstance(self.hidden, (int, np.integer)) else [int(h) for h in self.hidden]
-        self._inner = _core.BpModel.fit(x, y, hidden=hidden, **_net_kw(self))
+        self._inner = _core.BpModel.fit(x, y, hidden=hidden, large_n=_large_n(self.large_n), **_net_kw(self))
 
     def _predict(self, x: F64) -> F64:
         assert self._inner is not None

@@ -439,15 +439,12 @@ pub struct GreyBpValidParams {
 }
 
 impl Default for GreyBpParams {
-    /// Windows of 6, 8 and 10 samples; the network of [`BpParams::default`], with the large-n
-    /// rule ([`BpValidParams::large_n`]) from [`crate::nn::LARGE_N_DEFAULT`] (2000) training
-    /// rows on.
+    /// Windows of 6, 8 and 10 samples; the network of [`BpParams::default`] (with its large-n
+    /// rule, [`BpValidParams::large_n`]).
     fn default() -> Self {
         GreyBpParams(GreyBpValidParams {
             windows: vec![6, 8, 10],
-            net: BpParams::default()
-                .large_n(Some(crate::nn::LARGE_N_DEFAULT))
-                .0,
+            net: BpParams::default().0,
         })
     }
 }

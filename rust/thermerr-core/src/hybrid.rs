@@ -277,12 +277,10 @@ pub struct HybridValidParams {
 impl Default for HybridParams {
     /// The hybrid variant with 1 MA and 2 AR lags, C_Y = 0.02, outputs within ±50; a network of
     /// 30 tanh units with a tanh output, initial weights in [−0.5, 0.5], trained by Adam (lr 0.01)
-    /// for at most 10 000 epochs with an MSE goal of 0, patience 500, seed 0; from
-    /// [`crate::nn::LARGE_N_DEFAULT`] (2000) training rows on, the large-n rule
-    /// ([`BpValidParams::large_n`]).
+    /// for at most 10 000 epochs with an MSE goal of 0, patience 500, seed 0, and the large-n
+    /// rule of [`BpParams::default`] ([`BpValidParams::large_n`]).
     fn default() -> Self {
         let net = BpParams::new()
-            .large_n(Some(crate::nn::LARGE_N_DEFAULT))
             .hidden_sizes(vec![30])
             .hidden_activation(Act::Tanh)
             .output_activation(Act::Tanh)

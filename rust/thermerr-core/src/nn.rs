@@ -283,7 +283,8 @@ pub struct BpValidParams {
 impl Default for BpParams {
     /// 7 sigmoid hidden units, linear output of scale 1, initial weights in [−1, 1]; Adam with
     /// lr 0.01 (momentum 0.9 for the seed's trainer), at most 8000 epochs, the trainer's MSE goal,
-    /// patience 500, seed 0; no large-n rule.
+    /// patience 500, seed 0; the large-n rule from [`LARGE_N_DEFAULT`] training rows on (the
+    /// seeds' runs, a few hundred rows, never reach it).
     fn default() -> Self {
         BpParams(BpValidParams {
             hidden_sizes: vec![7],
@@ -298,7 +299,7 @@ impl Default for BpParams {
             goal: None,
             patience: 500,
             seed: 0,
-            large_n: None,
+            large_n: Some(LARGE_N_DEFAULT),
         })
     }
 }
@@ -435,8 +436,9 @@ pub const LARGE_N_BUDGET: usize = 500_000;
 pub const LARGE_N_MIN_EPOCHS: usize = 20;
 /// Largest patience (in epochs, on the validation MSE) of the large-n rule.
 pub const LARGE_N_PATIENCE: usize = 20;
-/// `large_n` of the sequence models (hybrid filter + network, rolling GM + BP): their seeds'
-/// runs have a few hundred rows, a long logged run tens of thousands.
+/// `large_n` of every network ([`BpParams::default`]: BP alone, and the networks of the hybrid
+/// filter and of the rolling GM + BP): the seeds' runs have a few hundred rows, a long logged run
+/// tens of thousands.
 pub const LARGE_N_DEFAULT: usize = 2000;
 /// Smallest accepted `large_n`.
 pub const LARGE_N_MIN: usize = 100;

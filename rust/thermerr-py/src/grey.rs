@@ -133,7 +133,7 @@ pub struct PyBpModel {
 #[pymethods]
 impl PyBpModel {
     #[staticmethod]
-    #[pyo3(signature = (x, y, *, hidden = None, trainer = None, lr = None, momentum = None, max_epochs = None, goal = None, patience = None, init = None, seed = None))]
+    #[pyo3(signature = (x, y, *, hidden = None, trainer = None, lr = None, momentum = None, max_epochs = None, goal = None, patience = None, init = None, seed = None, large_n = None))]
     #[allow(clippy::too_many_arguments)]
     fn fit(
         py: Python<'_>,
@@ -148,6 +148,7 @@ impl PyBpModel {
         patience: Option<usize>,
         init: Option<f64>,
         seed: Option<u64>,
+        large_n: Option<usize>,
     ) -> PyResult<Self> {
         let params = net(
             BpParams::new(),
@@ -160,7 +161,9 @@ impl PyBpModel {
             patience,
             init,
             seed,
-        );
+        )
+        // 0: never (Python's large_n=None)
+        .given(large_n, |p, l| p.large_n((l > 0).then_some(l)));
         let (xs, ys) = (samples(&x)?, slice1(&y)?);
         let inner = crate::detach(py, || params.check()?.fit(xs, ys))?;
         Ok(PyBpModel { inner })
