@@ -120,6 +120,27 @@ def test_fit_sequential_and_network_models(model, tmp_path, capsys):
     assert one["rms"] != closed["rms"]
 
 
+def test_a_model_worse_than_no_compensation_is_called_so(tmp_path, capsys):
+    # a probe wired the other way round: the model, right on its own run, doubles the error
+    from conftest import EXAMPLES
+
+    out = tmp_path / "m.json"
+    assert main(["fit", str(EXAMPLES / "lathe_run.csv"), "--axis", "E_x", "--no-guard", "--out", str(out),
+                 "--quiet"]) == 0
+    text = (EXAMPLES / "lathe_run.csv").read_text().splitlines()
+    k = text[0].split(",").index("E_x")
+    flipped = [text[0]] + [",".join(f"{-float(v)!r}" if j == k else v for j, v in enumerate(r.split(",")))
+                           for r in text[1:]]
+    (tmp_path / "flipped.csv").write_text("\n".join(flipped) + "\n")
+    capsys.readouterr()
+    assert main(["evaluate", str(out), str(tmp_path / "flipped.csv")]) == 0
+    said = capsys.readouterr().out
+    assert "note: the model leaves more error than no compensation on" in said
+    assert "compensating with it would make the machine worse" in said
+    assert main(["evaluate", str(out), str(EXAMPLES / "lathe_run.csv")]) == 0
+    assert "no compensation on" not in capsys.readouterr().out
+
+
 def test_a_sequence_model_says_how_it_was_scored_and_when_closed_loop_stands_still(tmp_path, capsys):
     """GM(1,N) alone, closed loop from a run's zero error, predicts that zero throughout
     (docs/methods.md): the command says so beside the figures, and gives the one-step ones."""

@@ -224,11 +224,18 @@ def _make_model(args: argparse.Namespace, n_train: int) -> Estimator:
     return MinMaxScaled(rbf)
 
 
-def _print_scores(args: argparse.Namespace, title: str, s: Scores) -> None:
+def _print_scores(args: argparse.Namespace, title: str, s: Scores, source: str = "",
+                  why: str = "; compensating with it would make the machine worse") -> None:
+    """The figures under ``title``, and a note when the model leaves more error on ``source``
+    than no compensation at all (its RMS residual above the measured error's RMS), ``why``
+    ending it."""
     if args.json:
         return
     print(f"{title}:")
     print("  " + str(s).replace("\n", "\n  "))
+    if s.rms > s.rms_measured:
+        _say(args, f"note: the model leaves more error than no compensation{' on ' + source if source else ''} "
+                   f"(RMS {s.rms:.4g} µm against {s.rms_measured:.4g} µm){why}")
 
 
 #: how the figures of a model fed its own previous outputs were taken (the grey and hybrid models)
@@ -256,13 +263,11 @@ def _one_step(args: argparse.Namespace, title: str, model: Any, run: Run, target
                    f"{run.source}: fed its own outputs from the start, its history never leaves that value "
                    "(the one-step figures below are what it does with the measured errors)")
     s = scores(run[target], model.predict_run(run, one_step=True, after=after))
-    _print_scores(args, f"{title}, {ONE_STEP}", s)
-    if s.rms > s.rms_measured:
-        why = (": a rolling GM(1,N) fitted to a few samples of slowly changing temperatures is a near-singular "
-               "system whose time response can grow without bound (docs/methods.md, GM(1,N))"
-               if getattr(model, "kind", "") in ("gm1n", "greybp") else "")
-        _say(args, f"note: even one step ahead the model is worse than no compensation on {run.source} "
-                   f"(RMS {s.rms:.4g} µm against {s.rms_measured:.4g} µm){why}; compare --model mlr, rbf or svr")
+    why = (": a rolling GM(1,N) fitted to a few samples of slowly changing temperatures is a near-singular "
+           "system whose time response can grow without bound (docs/methods.md, GM(1,N))"
+           if getattr(model, "kind", "") in ("gm1n", "greybp") else "")
+    _print_scores(args, f"{title}, {ONE_STEP}", s, f"{run.source}, even one step ahead",
+                  f"{why}; compare --model mlr, rbf or svr")
     return s
 
 
@@ -323,7 +328,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     from .grey import _Sequential
 
     loop = f" ({CLOSED_LOOP})" if isinstance(model, _Sequential) else ""
-    _print_scores(args, f"training run{loop}", train)
+    _print_scores(args, f"training run{loop}", train, run.source)
     one = _one_step(args, "training run", model, run, args.axis, closed)
     if one is not None:
         report["train_one_step"] = one.as_dict()
@@ -341,7 +346,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
         held = scores(test_run[args.axis], closed)
         report["test"] = held.as_dict()
         report["test_continues_training"] = after is not None
-        _print_scores(args, f"held-out run {test_run.source}{loop}", held)
+        _print_scores(args, f"held-out run {test_run.source}{loop}", held, test_run.source)
         one = _one_step(args, f"held-out run {test_run.source}", model, test_run, args.axis, closed, after)
         if one is not None:
             report["test_one_step"] = one.as_dict()
@@ -395,8 +400,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         inner = wrapped if isinstance(wrapped, Estimator) else model
         pre = f" ({type(model).__name__})" if inner is not model else ""
         loop = f" ({CLOSED_LOOP})" if isinstance(model, _Sequential) else ""
-        print(f"{inner.kind} model{pre} {args.model} on {run.source}, axis {target}{loop}:")
-        print("  " + str(s).replace("\n", "\n  "))
+        _print_scores(args, f"{inner.kind} model{pre} {args.model} on {run.source}, axis {target}{loop}", s,
+                      run.source)
     one = _one_step(args, f"{run.source}, axis {target}", model, run, target, closed, after)
     if args.json:
         extra = {} if one is None else {"one_step": one.as_dict()}
