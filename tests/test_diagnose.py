@@ -94,6 +94,33 @@ def test_without_holdout_uses_the_end_of_the_run_and_writes_the_report(tmp_path,
     assert Machine.load(out / "extended.toml").to_toml().count("[[drift.inputs]]") == 1
 
 
+def test_a_held_out_run_cut_from_the_same_log_is_joined_not_restarted(tmp_path, capsys):
+    """A log cut in two (train.csv, then test.csv whose clock goes on): the held-out file's
+    error is relative to the log's start, not its own. Before, it was diagnosed as a separate
+    run started from its own first readings: on the real 46-h run cut at 70 % the baselines held
+    out 7.5-26.5 µm instead of 2.4-11.9 µm and an ambient coupling and a speed growth were named
+    that the whole run does not show. Now it is the tail of one run, as without --holdout."""
+    c = syn.make_case("vmc", "speed_growth", 5)
+    syn.write_run_csv(tmp_path / "run.csv", c.train)
+    (tmp_path / "nominal.toml").write_text(c.nominal_toml())
+    full = tr.read_run(tmp_path / "run.csv")
+    cut = round(len(full) * 0.7)
+    lines = (tmp_path / "run.csv").read_text().splitlines()
+    (tmp_path / "train.csv").write_text("\n".join(lines[:cut + 1]) + "\n")
+    (tmp_path / "test.csv").write_text("\n".join(lines[:1] + lines[cut + 1:]) + "\n")
+    m = Machine.load(tmp_path / "nominal.toml")
+    whole = diagnose(full, m)
+    joined = diagnose(tr.read_run(tmp_path / "train.csv"), m, tr.read_run(tmp_path / "test.csv"))
+    assert joined.verdict == whole.verdict == "speed_growth"
+    assert joined.report["baseline"]["rmse_um"] == whole.report["baseline"]["rmse_um"]
+    assert joined.report["extended"]["rmse_um"] == whole.report["extended"]["rmse_um"]
+    assert "joined to the training run it continues" in joined.report["holdout"]
+    assert main(["diagnose", str(tmp_path / "train.csv"), "--holdout", str(tmp_path / "test.csv"), "--machine",
+                 str(tmp_path / "nominal.toml"), "--out", str(tmp_path / "d")]) == 0
+    out = capsys.readouterr().out
+    assert "test.csv continues" in out and "verdict: speed_growth" in out
+
+
 def test_report_write_is_atomic(tmp_path, monkeypatch):
     c = syn.make_case("lathe", "none", 4, hours=(8.0, 4.0))
     d = diagnose(tr.Run.from_frame(c.train), Machine.from_toml(c.nominal_toml()), tr.Run.from_frame(c.test))

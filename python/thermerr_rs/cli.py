@@ -558,6 +558,10 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     machine = Machine.load(args.machine)
     run = _read(args, args.run)
     hold = _read(args, args.holdout) if args.holdout else None
+    if hold is not None and hold.continues(run):
+        _say(args, f"{hold.source} continues {run.source} (its clock starts {hold.time_s[0] - run.time_s[-1]:g} s after "
+                   f"{run.source}'s last sample): held out as the tail of one run, the model running on from "
+                   f"{run.source}'s start")
     axes = args.axis or machine.axes
     warm = threading.Thread(target=_warm_report, name="thermerr-warm-report", daemon=True)
     warm.start()
@@ -797,7 +801,8 @@ def build_parser() -> argparse.ArgumentParser:
     dg.add_argument("run", help="measured run CSV")
     dg.add_argument("--machine", required=True, help="nominal machine TOML")
     dg.add_argument("--out", required=True, help="directory for report.json, report.html, calibrated.toml, extended.toml")
-    dg.add_argument("--holdout", default=None, help="a separate held-out run (default: the last 30 %% of RUN)")
+    dg.add_argument("--holdout", default=None, help="a separate held-out run (default: the last 30 %% of RUN); one whose clock goes on "
+                         "from RUN's last sample (a log cut in two) is held out as RUN's tail")
     dg.add_argument("--axis", action="append", default=None,
                     help="error axis; repeat for several (default: every drift entry of the machine). "
                          "Several axes write a summary report.json/report.html and <axis>.report.json, "

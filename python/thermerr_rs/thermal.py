@@ -290,6 +290,18 @@ def _progress_bar(show: bool | None, desc: str) -> Iterator[Callable[[int, int, 
         bar.close()
 
 
+def _joined(run: Run, holdout: Run | None) -> tuple[Run, Run | None, int | None]:
+    """A held-out run that continues ``run`` (cut from the same log, :meth:`Run.continues`): its
+    errors and temperatures go on from ``run``'s start, so it is joined to ``run``
+    (:meth:`Run.following`) and held out from ``len(run)`` on, as the tail of one run is; the
+    model runs on through the join from the training run's start. As a separate run its first
+    readings would be taken for a start, and its error, relative to the log's start, would look
+    like tens of µm of drift. Anything else is returned as given."""
+    if holdout is None or not holdout.continues(run):
+        return run, holdout, None
+    return holdout.following(run), None, len(run)
+
+
 def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: str | None = None,
              holdout_fraction: float = 0.3, min_score: float = 0.1, noise_ratio: float = 2.0,
              network: str = "auto", progress: bool | None = None) -> Diagnosis:
@@ -298,7 +310,9 @@ def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: st
     go on in rounds on the extended machine while a further cause passes (docs/machine-model.md).
 
     Every figure in the result is on held-out data: the ``holdout`` run, or the last
-    ``holdout_fraction`` of ``run``. ``network``: the baseline's thermal network —
+    ``holdout_fraction`` of ``run``. A ``holdout`` run that continues ``run`` (its clock goes on
+    from ``run``'s last sample: a log cut in two) is joined to it and held out as its tail, the
+    model running on from ``run``'s start. ``network``: the baseline's thermal network —
     ``"auto"`` (default: as ``"recalibrate"``, except that a network identified from data
     (:meth:`Machine.identify`, ``thermerr init``) is kept when its recalibration is not unique:
     a start stops at the iteration limit, or a second start fits the training rows as well and
@@ -314,10 +328,11 @@ def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: st
     Candidates still refit the network with their extension.
     ``progress``: a bar of the calibrations done (default: when stderr is a terminal).
     """
+    run, holdout, train_rows = _joined(run, holdout)
     with _progress_bar(progress, "diagnosis") as cb:
         d = machine._inner.diagnose(*_run_args(run), _run_args(holdout) if holdout is not None else None,
-                                    axis=axis, holdout_fraction=holdout_fraction, min_score=min_score,
-                                    noise_ratio=noise_ratio, network=network, progress=cb)
+                                    axis=axis, holdout_fraction=holdout_fraction, train_rows=train_rows,
+                                    min_score=min_score, noise_ratio=noise_ratio, network=network, progress=cb)
     out = _diagnosis(d)
     _warn_suspects(sp["text"] for sp in out.report.get("suspect_readings", []))
     return out
@@ -402,12 +417,14 @@ def diagnose_axes(run: Run, machine: Machine, holdout: Run | None = None, *, axe
     column, with its own calibration of the network and its own causes and remainder.
     ``network``: as for :func:`diagnose`, per axis; under ``"shared"`` the one network is
     calibrated once (on the temperatures alone) and every axis keeps it.
-    ``progress``: one bar of every axis's calibrations (default: when stderr is a terminal)."""
+    ``progress``: one bar of every axis's calibrations (default: when stderr is a terminal).
+    A ``holdout`` that continues ``run`` is joined to it, as for :func:`diagnose`."""
+    run, holdout, train_rows = _joined(run, holdout)
     with _progress_bar(progress, "diagnosis of the axes") as cb:
         ds = machine._inner.diagnose_axes(*_run_args(run), _run_args(holdout) if holdout is not None else None,
                                           axes=list(axes or []), holdout_fraction=holdout_fraction,
-                                          min_score=min_score, noise_ratio=noise_ratio, network=network,
-                                          progress=cb)
+                                          train_rows=train_rows, min_score=min_score, noise_ratio=noise_ratio,
+                                          network=network, progress=cb)
     out = {d.axis: d for d in map(_diagnosis, ds)}
     res = AxesDiagnosis(out, run.source, machine._inner.file)
     _warn_suspects(sp["text"] for sp in res.report["suspect_readings"])

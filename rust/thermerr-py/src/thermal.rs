@@ -271,7 +271,7 @@ impl PyMachine {
 
     /// The full diagnosis; returns a dict: `report` (report.json as JSON text), `calibration`
     /// (the baseline's fit figures), `series` and the calibrated/extended TOML.
-    #[pyo3(signature = (source, time, names, data, holdout = None, *, axis = None, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0, network = "auto", progress = None))]
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axis = None, holdout_fraction = 0.3, train_rows = None, min_score = 0.1, noise_ratio = 2.0, network = "auto", progress = None))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn diagnose<'py>(
         &self,
@@ -283,6 +283,7 @@ impl PyMachine {
         holdout: PyHoldout<'py>,
         axis: Option<String>,
         holdout_fraction: f64,
+        train_rows: Option<usize>,
         min_score: f64,
         noise_ratio: f64,
         network: &str,
@@ -291,6 +292,7 @@ impl PyMachine {
         let (opts, watch) = diagnose_options(
             axis,
             holdout_fraction,
+            train_rows,
             min_score,
             noise_ratio,
             network,
@@ -311,7 +313,7 @@ impl PyMachine {
 
     /// The diagnosis of every axis in `axes`, one per axis in parallel, each on the shared
     /// temperatures and its own error column; a list of `diagnose`'s dicts in `axes` order.
-    #[pyo3(signature = (source, time, names, data, holdout = None, *, axes, holdout_fraction = 0.3, min_score = 0.1, noise_ratio = 2.0, network = "auto", progress = None))]
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axes, holdout_fraction = 0.3, train_rows = None, min_score = 0.1, noise_ratio = 2.0, network = "auto", progress = None))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn diagnose_axes<'py>(
         &self,
@@ -323,6 +325,7 @@ impl PyMachine {
         holdout: PyHoldout<'py>,
         axes: Vec<String>,
         holdout_fraction: f64,
+        train_rows: Option<usize>,
         min_score: f64,
         noise_ratio: f64,
         network: &str,
@@ -331,6 +334,7 @@ impl PyMachine {
         let (opts, watch) = diagnose_options(
             None,
             holdout_fraction,
+            train_rows,
             min_score,
             noise_ratio,
             network,
@@ -413,6 +417,7 @@ type Watch = Option<(Py<PyAny>, Arc<Progress>)>;
 fn diagnose_options(
     axis: Option<String>,
     holdout_fraction: f64,
+    train_rows: Option<usize>,
     min_score: f64,
     noise_ratio: f64,
     network: &str,
@@ -422,6 +427,7 @@ fn diagnose_options(
     let opts = DiagnoseOptions {
         axis,
         holdout_fraction,
+        train_rows,
         min_score,
         noise_ratio,
         network: network.parse().map_err(PyErrWrap)?,

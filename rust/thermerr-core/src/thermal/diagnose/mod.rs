@@ -63,6 +63,10 @@ pub struct DiagnoseOptions {
     pub axis: Option<String>,
     /// Share of the run held out (its end) when no separate held-out run is given.
     pub holdout_fraction: f64,
+    /// The training rows, when no separate held-out run is given: the rows after them are held
+    /// out instead of the last `holdout_fraction` (a held-out run that continues the training
+    /// run, joined to it, so that the model runs on from the training run's start).
+    pub train_rows: Option<usize>,
     /// Samples of a separate held-out run used to estimate its initial state.
     pub init_window: usize,
     /// A candidate must improve the held-out score by at least this to be named.
@@ -83,6 +87,7 @@ impl Default for DiagnoseOptions {
         DiagnoseOptions {
             axis: None,
             holdout_fraction: 0.3,
+            train_rows: None,
             init_window: 20,
             min_score: 0.1,
             noise_ratio: 2.0,
@@ -702,6 +707,18 @@ fn split_of(train: &RunView<'_>, separate: bool, opts: &DiagnoseOptions) -> Resu
     if separate {
         return Ok(n);
     }
+    if let Some(r) = opts.train_rows {
+        if r == 0 || r >= n {
+            return Err(Error::param(
+                "train_rows",
+                format!(
+                    "must be within 1..{n} (the rows of {}), got {r}",
+                    train.source
+                ),
+            ));
+        }
+        return Ok(r);
+    }
     if !(0.05..=0.8).contains(&opts.holdout_fraction) {
         return Err(Error::param("holdout_fraction", "must be within 0.05..0.8"));
     }
@@ -870,13 +887,21 @@ fn diagnose_on(
             h.col(&axis)?.to_vec(),
         ),
         None => (
-            format!(
-                "the last {:.0} % of {} ({} of {} samples)",
-                100.0 * opts.holdout_fraction,
-                train.source,
-                n - split,
-                n
-            ),
+            match opts.train_rows {
+                Some(_) => format!(
+                    "the last {} of the {} samples of {} (a held-out run joined to the training run it continues: the model runs on from the training run's start)",
+                    n - split,
+                    n,
+                    train.source
+                ),
+                None => format!(
+                    "the last {:.0} % of {} ({} of {} samples)",
+                    100.0 * opts.holdout_fraction,
+                    train.source,
+                    n - split,
+                    n
+                ),
+            },
             train.time[split..].to_vec(),
             train.col(&axis)?[split..].to_vec(),
         ),
