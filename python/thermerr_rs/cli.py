@@ -244,6 +244,13 @@ ONE_STEP = ("one step ahead: the measured error of the step before is given, as 
             "(seed 002's protocol)")
 
 
+def _loop(model: Any) -> str:
+    """`` (closed loop: ...)`` after the title of a grey or filter model's figures, else ``""``."""
+    from .grey import _Sequential
+
+    return f" ({CLOSED_LOOP})" if isinstance(model, _Sequential) else ""
+
+
 def _one_step(args: argparse.Namespace, title: str, model: Any, run: Run, target: str,
               closed: Any, after: Run | None = None) -> Scores | None:
     """A model whose prediction feeds on the errors before it (GM(1,N), GM+BP, the hybrid filter
@@ -325,9 +332,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     closed = model.predict_run(run)
     train = scores(run[args.axis], closed)
     report["train"] = train.as_dict()
-    from .grey import _Sequential
-
-    loop = f" ({CLOSED_LOOP})" if isinstance(model, _Sequential) else ""
+    loop = _loop(model)
     _print_scores(args, f"training run{loop}", train, run.source)
     one = _one_step(args, "training run", model, run, args.axis, closed)
     if one is not None:
@@ -391,16 +396,13 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if after is not None and not run.continues(after):
         _say(args, f"note: {run.source}'s clock does not go on from {after.source}'s: it is moved to start one "
                    "sampling step after it")
-    from .grey import _Sequential
-
     closed = model.predict_run(run, after=after)
     s = scores(run[target], closed)
     if not args.json:
         wrapped = getattr(model, "estimator", None)  # the model inside a preprocessing wrapper
         inner = wrapped if isinstance(wrapped, Estimator) else model
         pre = f" ({type(model).__name__})" if inner is not model else ""
-        loop = f" ({CLOSED_LOOP})" if isinstance(model, _Sequential) else ""
-        _print_scores(args, f"{inner.kind} model{pre} {args.model} on {run.source}, axis {target}{loop}", s,
+        _print_scores(args, f"{inner.kind} model{pre} {args.model} on {run.source}, axis {target}{_loop(model)}", s,
                       run.source)
     one = _one_step(args, f"{run.source}, axis {target}", model, run, target, closed, after)
     if args.json:
