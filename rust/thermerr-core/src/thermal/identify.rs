@@ -1662,6 +1662,23 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             heated_by: heated_by[i].clone(),
         });
     }
+    // a node slower than the training rows last: they show it warming, not how far it goes
+    let span = run.time_s[m - 1] - run.time_s[0];
+    let slow: Vec<String> = infos
+        .iter()
+        .filter(|i| i.tau_s > span)
+        .map(|i| format!("{} ({})", i.name, fmt_s(i.tau_s)))
+        .collect();
+    if !slow.is_empty() {
+        notes.push(format!(
+            "calibrated time constant longer than the training rows last ({}): {}; the run shows \
+             such a node warming, not where it settles, so the value is hardly determined (two \
+             values far apart may fit the training rows alike) and the held-out figures lean on \
+             it",
+            fmt_s(span),
+            slow.join(", ")
+        ));
+    }
     let mut id = Identification {
         machine,
         toml: String::new(),
