@@ -379,6 +379,18 @@ def cmd_fit(args: argparse.Namespace) -> int:
     return 0
 
 
+def _piece_note(args: argparse.Namespace, run: Run, after: Run | None, start: str) -> None:
+    """The notes of a command that starts from a run's first row (``start`` says what that means
+    for it): a clock that starts late may be a later piece of a longer log, whose error is relative
+    to the log's start (pass ``--after``); an ``--after`` run the clock does not go on from."""
+    if after is None and run.time_s[0] > 0:
+        _say(args, f"note: {run.source}'s clock starts at {run.time_s[0]:g} s: if it is a later piece of a longer "
+                   f"log, pass --after with that log's earlier rows ({start})")
+    if after is not None and not run.continues(after):
+        _say(args, f"note: {run.source}'s clock does not go on from {after.source}'s: it is moved to start one "
+                   "sampling step after it")
+
+
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from .base import Estimator, load_model
 
@@ -388,14 +400,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if not target:
         raise ThermerrError(f"{args.model} does not record its target axis: pass --axis")
     after = _read(args, args.after) if args.after else None
-    if after is None and run.time_s[0] > 0 and getattr(model, "inputs_", None) == "rise":
-        # rises are taken from the run's own first sample: right for a run of its own, wrong for a
-        # later piece of a longer log (its error is relative to the log's start)
-        _say(args, f"note: {run.source}'s clock starts at {run.time_s[0]:g} s: if it is a later piece of a longer "
-                   "log, pass --after with that log's earlier rows (its rises are taken from its own first row)")
-    if after is not None and not run.continues(after):
-        _say(args, f"note: {run.source}'s clock does not go on from {after.source}'s: it is moved to start one "
-                   "sampling step after it")
+    if getattr(model, "inputs_", None) == "rise" or after is not None:
+        _piece_note(args, run, after, "its rises are taken from its own first row")
     closed = model.predict_run(run, after=after)
     s = scores(run[target], closed)
     if not args.json:
@@ -450,10 +456,21 @@ def cmd_predict(args: argparse.Namespace) -> int:
     from ._io import write_atomic
     from .thermal import Machine
 
-    _check_out(args.out, args.run, args.machine)
+    _check_out(args.out, args.run, args.machine, args.after)
     machine = Machine.load(args.machine)
     run = _read(args, args.run)
-    sim = machine.simulate(run, fit_initial=args.fit_initial)
+    after = _read(args, args.after) if args.after else None
+    _piece_note(args, run, after, "the network starts from its own first readings, with zero drift there")
+    if args.start == "identified" and args.fit_initial:
+        raise ThermerrError("--start identified and --fit-initial both set the start: give one")
+    ident = machine.to_dict().get("identified") or {}
+    if (args.start == "first" and not args.fit_initial and after is None and ident.get("initial_k")
+            and os.path.basename(run.source) == os.path.basename(str(ident.get("source")))):
+        _say(args, f"note: {args.machine} was identified from a run named {ident['source']}, and its stated figures "
+                   "are from the start fitted there; this simulation starts from the first readings as they are "
+                   "(--start identified starts from the fitted start)")
+    sim = machine.simulate(run, fit_initial=args.fit_initial, after=after,
+                           initial_k="identified" if args.start == "identified" else None)
     stamps = _iso_stamps(args.run, args.delimiter, run)
     cols: dict[str, Any] = {"time": stamps} if stamps is not None else {"time_s": run.time_s}
     cols.update({f"{a}_pred": v for a, v in sim.drift.items()})
@@ -464,7 +481,7 @@ def cmd_predict(args: argparse.Namespace) -> int:
         lines.append(",".join(cols[n][i] if n == "time" else f"{cols[n][i]:.6f}" for n in names))
     write_atomic(args.out, "\n".join(lines) + "\n")
     if args.json:
-        _print_json({"out": args.out, "columns": names[1:], "samples": len(run)})
+        _print_json({"out": args.out, "columns": names[1:], "samples": len(run), "after": args.after})
     else:
         _say(args, f"wrote {args.out}: {', '.join(names[1:])} for {len(run)} samples")
     return 0
@@ -496,7 +513,8 @@ def cmd_init(args: argparse.Namespace) -> int:
     for a in s["axes"]:
         _say(args, f"{a['axis']}: training RMS {a['train_rmse_um']:.3f} µm, "
                    f"held-out RMS {a['holdout_rmse_um']:.3f} µm (last {s['holdout_rows']} rows; "
-                   f"probe noise {a['noise_um']:.2f} µm)")
+                   f"probe noise {a['noise_um']:.2f} µm; from the first readings as they are: "
+                   f"{a['first_reading_train_rmse_um']:.3f} and {a['first_reading_holdout_rmse_um']:.3f} µm)")
     for note in s["notes"]:
         _say(args, f"note: {note}")
     _say(args, f"wrote {args.out}")
@@ -776,6 +794,13 @@ def build_parser() -> argparse.ArgumentParser:
     pr.add_argument("--out", required=True, help="CSV to write: time_s, E_<axis>_pred, T_<sensor>_pred")
     pr.add_argument("--fit-initial", type=_nonneg_int, default=0, metavar="N",
                     help="estimate the sensed nodes' start from the first N readings (default: first reading)")
+    pr.add_argument("--start", choices=["first", "identified"], default="first",
+                    help="the nodes' start: their first readings as they are (default), or 'identified': the "
+                         "start thermerr init fitted on the run it identified the machine from ([identified] "
+                         "initial_k), which the file's stated figures are from")
+    pr.add_argument("--after", metavar="EARLIER.csv",
+                    help="the run is a later piece of a log whose earlier rows are EARLIER.csv: simulate from "
+                         "EARLIER.csv's start (drift relative to the log's start) and write the run's rows")
     common(pr)
     pr.set_defaults(func=cmd_predict)
 

@@ -11,14 +11,14 @@ from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from . import _core
 from ._arrays import F64
 from ._io import write_atomic
-from .errors import SuspectReadingWarning
+from .errors import DataError, SuspectReadingWarning
 from .run import Run
 
 #: The baseline network rules ``diagnose(network=...)`` takes (the core's list).
@@ -94,6 +94,17 @@ class Machine:
     def to_toml(self) -> str:
         return self._inner.to_toml()
 
+    @property
+    def identified_start(self) -> dict[str, float]:
+        """The start ``thermerr init`` fitted on the run it identified this network from (K added
+        to each node's first reading; ``[identified] initial_k``): the start of the figures the
+        file states. Raises :class:`DataError` for a machine without one."""
+        start = (self.to_dict().get("identified") or {}).get("initial_k")
+        if not start:
+            raise DataError(f"machine {self.name!r} has no identified start ([identified] initial_k): "
+                            "it was not identified by this version of thermerr init")
+        return {str(k): float(v) for k, v in start.items()}
+
     def to_dict(self) -> dict[str, Any]:
         """The machine's fields as plain data, with the TOML's structure (docs/formats.md):
         ``name``, ``ambient``, ``nodes``, ``links``, ``sources``, ``drift`` and, for a network
@@ -124,14 +135,31 @@ class Machine:
         """Every run column the machine reads."""
         return self._inner.columns()
 
-    def simulate(self, run: Run, *, fit_initial: int = 0, initial_k: dict[str, float] | None = None) -> Simulation:
+    def simulate(self, run: Run, *, fit_initial: int = 0,
+                 initial_k: dict[str, float] | Literal["identified"] | None = None,
+                 after: Run | None = None) -> Simulation:
         """Simulate ``run`` from its inputs and boundary columns. ``fit_initial=N`` estimates the
         sensed nodes' initial temperatures from the first N readings (least squares) instead of
         taking the first reading as it is; ``initial_k`` gives the start instead, K added to each
-        named node's start (a diagnosis report's ``baseline.initial_k`` reproduces its figures)."""
-        d = self._inner.simulate(*_run_args(run), fit_initial=int(fit_initial),
+        named node's start (a diagnosis report's ``baseline.initial_k`` reproduces its figures;
+        ``"identified"``: the start ``thermerr init`` fitted on its run, the file's
+        ``[identified] initial_k``, which its stated figures are from).
+
+        ``after``: ``run`` is a later piece of a log whose earlier rows are ``after``. The network
+        starts from ``after``'s first readings and runs on through the join
+        (:meth:`Run.following`), so the drift is relative to the log's start, as the piece's
+        measured error is; the result holds ``run``'s rows only. Without it the network starts
+        from ``run``'s own first readings, with zero drift there."""
+        whole = run if after is None else run.following(after)
+        if initial_k == "identified":
+            initial_k = self.identified_start
+        d = self._inner.simulate(*_run_args(whole), fit_initial=int(fit_initial),
                                  initial_k=None if initial_k is None else {str(k): float(v) for k, v in initial_k.items()})
-        return Simulation(run.time_s, d["node_names"], d["nodes"], d["sensors"], d["drift"])
+        if after is None:
+            return Simulation(run.time_s, d["node_names"], d["nodes"], d["sensors"], d["drift"])
+        k = len(whole) - len(run)
+        return Simulation(run.time_s, d["node_names"], d["nodes"][k:],
+                          {c: v[k:] for c, v in d["sensors"].items()}, {a: v[k:] for a, v in d["drift"].items()})
 
     def calibrate(self, run: Run, axis: str | None = None, *, bound_factor: float = 3.0,
                   max_iter: int = 60) -> tuple[Machine, dict[str, Any]]:

@@ -243,7 +243,7 @@ pub fn default_params(m: &Machine, opts: &CalibrationOptions) -> Vec<FreeParam> 
 /// Writes parameter values (in search space) into a copy of the machine; returns it and the
 /// initial offsets.
 pub fn apply(m: &Machine, free: &[FreeParam], x: &[f64]) -> (Machine, Vec<f64>) {
-    let mut out = m.clone();
+    let mut out = m.refit_copy();
     let mut init = vec![0.0; m.nodes.len()];
     for (fp, &v) in free.iter().zip(x) {
         let v = if fp.log { portable::exp(v) } else { v };
@@ -498,7 +498,7 @@ pub fn evaluate(
     refit_drift: bool,
 ) -> Result<(Machine, Simulation, Vec<f64>)> {
     let temps = simulate_nodes(m, run, &Init::Offsets(init.to_vec()))?;
-    let mut fitted = m.clone();
+    let mut fitted = m.refit_copy();
     if refit_drift {
         let (coef, _) = fit_drift(m, tg.axis_index, run, &temps, &tg.error, rows, sigma_e)?;
         store_drift(&mut fitted, tg.axis_index, &coef);

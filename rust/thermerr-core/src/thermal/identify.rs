@@ -192,8 +192,13 @@ pub struct NodeInfo {
 #[derive(Clone, Debug, Serialize)]
 pub struct AxisFit {
     pub axis: String,
+    /// From the start the calibration fitted on the training rows (`Identified::initial_k`).
     pub train_rmse_um: f64,
     pub holdout_rmse_um: f64,
+    /// From the sensors' first readings as they are: where a simulation of a run starts unless
+    /// told otherwise (`thermerr predict`).
+    pub first_reading_train_rmse_um: f64,
+    pub first_reading_holdout_rmse_um: f64,
     /// The probe's noise on the training rows (the diagnosis's estimate), for scale.
     pub noise_um: f64,
 }
@@ -1582,24 +1587,59 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             *v = sig4(*v);
         }
     }
-    let sim = simulate(&machine, &view, &Init::Offsets(cal.init.clone()))?;
+    // the start is written to the file too (`[identified] initial_k`), rounded as the rest
+    let init: Vec<f64> = cal.init.iter().map(|&v| sig4(v)).collect();
+    let sim = simulate(&machine, &view, &Init::Offsets(init.clone()))?;
+    let plain = simulate(&machine, &view, &Init::FirstReading)?;
     let mut axes = Vec::new();
-    for (ax, pred) in &sim.drift {
+    for ((ax, pred), (_, first)) in sim.drift.iter().zip(&plain.drift) {
         // a failing probe's rows are not scored
         let e = Reading::of(&view, ax)?;
-        let err = |rows: std::ops::Range<usize>| {
-            rms(rows.filter(|&i| e.reads(i)).map(|i| pred[i] - e.values[i]))
+        let err = |p: &[f64], rows: std::ops::Range<usize>| {
+            rms(rows.filter(|&i| e.reads(i)).map(|i| p[i] - e.values[i]))
         };
         axes.push(AxisFit {
             axis: ax.clone(),
-            train_rmse_um: err(0..m),
-            holdout_rmse_um: err(m..n),
+            train_rmse_um: err(pred, 0..m),
+            holdout_rmse_um: err(pred, m..n),
+            first_reading_train_rmse_um: err(first, 0..m),
+            first_reading_holdout_rmse_um: err(first, m..n),
             noise_um: e.noise(m),
         });
     }
+    // the `none` bar of a diagnosis: held-out error within it is noise
+    let ratio = super::diagnose::DiagnoseOptions::default().noise_ratio;
+    // the fitted start carries the figures: say what the first readings as they are give
+    let leaning: Vec<String> = axes
+        .iter()
+        .filter(|a| {
+            let worse = |fitted: f64, first: f64| first > 2.0 * fitted.max(ratio * a.noise_um);
+            worse(a.train_rmse_um, a.first_reading_train_rmse_um)
+                || (n > m && worse(a.holdout_rmse_um, a.first_reading_holdout_rmse_um))
+        })
+        .map(|a| a.axis.clone())
+        .collect();
+    if !leaning.is_empty() {
+        let offs: Vec<String> = names
+            .iter()
+            .zip(&init)
+            .filter(|(_, &k)| k != 0.0)
+            .map(|(nm, k)| format!("{nm} {k:+} K"))
+            .collect();
+        notes.push(format!(
+            "the training and held-out figures are from the start the calibration fitted on the \
+             training rows (`[identified] initial_k`: {}); from the sensors' first readings as \
+             they are, where a simulation starts a run (`thermerr predict`), they are more than \
+             twice as large on {}: the drift map carries a start offset on through the run \
+             (longest on a slow node), so on another run its figures lean on a start no sensor \
+             gives; `thermerr predict RUN --start identified` simulates this run from the fitted \
+             start",
+            offs.join(", "),
+            leaning.join(", ")
+        ));
+    }
     // what a diagnosis with this network will make of it: held-out error beyond the `none` bar
     // is either a cause or a remainder, and a remainder is the likelier answer
-    let ratio = super::diagnose::DiagnoseOptions::default().noise_ratio;
     let over: Vec<String> = axes
         .iter()
         .filter(|a| n > m && a.holdout_rmse_um > ratio * a.noise_um)
@@ -1634,6 +1674,12 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         holdout_rmse_um: axes
             .iter()
             .map(|a| (a.axis.clone(), sig4(a.holdout_rmse_um)))
+            .collect(),
+        initial_k: names
+            .iter()
+            .zip(&init)
+            .filter(|(_, &k)| k != 0.0)
+            .map(|(nm, &k)| (nm.clone(), k))
             .collect(),
     });
     let mut infos = Vec::new();
@@ -1820,8 +1866,13 @@ fn commented_toml(id: &Identification) -> Result<String> {
     line("# calibration, so capacities and conductances are in that convention.");
     for a in &id.axes {
         line(&format!(
-            "# {}: training RMS {:.3} µm, held-out RMS {:.3} µm",
-            a.axis, a.train_rmse_um, a.holdout_rmse_um
+            "# {}: training RMS {:.3} µm, held-out RMS {:.3} µm (from the first readings as \
+             they are: {:.3} and {:.3} µm)",
+            a.axis,
+            a.train_rmse_um,
+            a.holdout_rmse_um,
+            a.first_reading_train_rmse_um,
+            a.first_reading_holdout_rmse_um
         ));
     }
     for note in &id.notes {
@@ -1933,7 +1984,15 @@ fn commented_toml(id: &Identification) -> Result<String> {
         for (key, map) in [
             ("train_rmse_um", &p.train_rmse_um),
             ("holdout_rmse_um", &p.holdout_rmse_um),
+            ("initial_k", &p.initial_k),
         ] {
+            if key == "initial_k" {
+                if map.is_empty() {
+                    continue;
+                }
+                line("# the start those figures are from: K added to each node's first reading,");
+                line("# fitted on the training rows (`thermerr predict --start identified`)");
+            }
             let parts: Vec<String> = map
                 .iter()
                 .map(|(k, v)| format!("{} = {}", toml_key(k), num(*v)))

@@ -146,6 +146,10 @@ pub struct Identified {
     pub train_rmse_um: BTreeMap<String, f64>,
     #[serde(default)]
     pub holdout_rmse_um: BTreeMap<String, f64>,
+    /// The start those figures are from: K added to each named node's first reading (its
+    /// sensor's, or the ambient's for an unsensed node), fitted on the training rows.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub initial_k: BTreeMap<String, f64>,
 }
 
 /// `between` names exactly two nodes (a fixed-size array would silently drop a third).
@@ -171,6 +175,17 @@ pub(crate) fn bad(file: &str, entry: impl Into<String>, reason: impl Into<String
 }
 
 impl Machine {
+    /// A copy to write fitted values into. An identified network's start (`[identified]
+    /// initial_k`) is the start of the file's own figures, not of a refitted machine's: the copy
+    /// drops it, so that `--start identified` is refused rather than misapplied.
+    pub fn refit_copy(&self) -> Machine {
+        let mut out = self.clone();
+        if let Some(id) = out.identified.as_mut() {
+            id.initial_k.clear();
+        }
+        out
+    }
+
     /// Reads and validates a machine TOML file.
     pub fn load(path: &Path) -> Result<Machine> {
         let file = path.display().to_string();
@@ -395,6 +410,17 @@ impl Machine {
                 format!("nodes[{i}] `{}`", self.nodes[i].name),
                 "reaches neither the ambient nor a boundary through its links: the network is singular",
             ));
+        }
+        if let Some(id) = &self.identified {
+            for (name, k) in &id.initial_k {
+                let at = format!("identified.initial_k `{name}`");
+                if !index.contains_key(name.as_str()) {
+                    return Err(bad(file, at, "no node of that name"));
+                }
+                if !k.is_finite() {
+                    return Err(bad(file, at, "must be a finite number of K"));
+                }
+            }
         }
         Ok(())
     }
