@@ -48,6 +48,7 @@ on the VMC, so it reports when identification gets there; it was not widened.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -332,10 +333,7 @@ def test_the_report_says_the_network_was_identified(tmp_path):
     assert info["train_rows"] == s["train_rows"] and info["holdout_rows"] == s["holdout_rows"]
     assert set(info["holdout_rmse_um"]) == {"E_z"}
     d = diagnose(train, m, test)
-    # the report's start is its own (`baseline.initial_k`): init's fitted start is not repeated
-    assert info["initial_k"] and "initial_k" in d.report["baseline"]
-    assert d.report["identified"] is True
-    assert d.report["identification"] == {k: v for k, v in info.items() if k != "initial_k"}
+    assert d.report["identified"] is True and d.report["identification"] == info
     page = Path(d.write(tmp_path / "rep")).read_text()
     assert "identified from data" in page and page.count("<svg") == 1
     for n in m.nodes:
@@ -366,19 +364,20 @@ def test_an_unknown_key_in_the_identified_table_is_one_line():
 
 def test_the_file_states_the_start_its_figures_are_from(tmp_path, capsys):
     """init's figures are from the start its calibration fitted (each node's first reading plus
-    an offset, ±1 K): the file keeps it as ``[identified] initial_k`` and
-    ``simulate(run, initial_k="identified")`` reproduces the stated figures; the figures from
-    the first readings as they are (where a plain simulation starts) are stated beside them. A
-    refitted machine drops the start, which is not the start of its figures."""
+    an offset, ±1 K): the file keeps it as its ``[start]`` table and
+    ``simulate(run, initial_k="fitted")`` reproduces the stated figures; the figures from the
+    first readings as they are (where a plain simulation starts) are stated beside them. A
+    machine calibrated again carries its own start, which reproduces its own figures."""
     c = syn.make_case("vmc", "none", 1, hours=HOURS, dt=DT_S)
     run = _run(c.train, "run.csv")
     m, s = Machine.identify(run)
-    start = m.identified_start
-    assert start and set(start) <= set(m.nodes) and any(v != 0.0 for v in start.values())
+    start = m.fitted_start
+    assert set(start) == set(m.nodes) and any(v != 0.0 for v in start.values())
+    assert m.to_dict()["start"]["run"] == "run.csv"
     ident = m.to_dict()["identified"]
     k = ident["train_rows"]
     rms = lambda r: float(np.sqrt(np.mean(r**2)))  # noqa: E731
-    fitted = m.simulate(run, initial_k="identified").drift["E_z"] - run["E_z"]
+    fitted = m.simulate(run, initial_k="fitted").drift["E_z"] - run["E_z"]
     plain = m.simulate(run).drift["E_z"] - run["E_z"]
     # the file's figures are rounded to 4 significant digits
     np.testing.assert_allclose([rms(fitted[:k]), rms(fitted[k:])],
@@ -387,27 +386,39 @@ def test_the_file_states_the_start_its_figures_are_from(tmp_path, capsys):
     np.testing.assert_allclose([rms(plain[:k]), rms(plain[k:])],
                                [a["first_reading_train_rmse_um"], a["first_reading_holdout_rmse_um"]], rtol=1e-9)
     assert "from the first readings as they are:" in s["toml"]
-    cal, _ = m.calibrate(run)
-    with pytest.raises(DataError, match="no identified start"):
-        cal.simulate(run, initial_k="identified")
+    # calibrated again: a start of its own, the one its fit ended at
+    cal, info = m.calibrate(run)
+    assert cal.fitted_start == dict(zip(m.nodes, info["init_offsets"]))
+    assert cal.fitted_start != start
+    # a machine written by hand has none, and says so
+    with pytest.raises(DataError, match="no fitted start"):
+        Machine.from_toml(c.nominal_toml()).simulate(run, initial_k="fitted")
     # an entry that names no node is one line naming it
     bad = s["toml"].replace("initial_k = { ", "initial_k = { t_nope = 0.5, ")
-    with pytest.raises(ThermerrError, match=r"m\.toml: identified\.initial_k `t_nope`: no node of that name"):
+    with pytest.raises(ThermerrError, match=r"m\.toml: start\.initial_k `t_nope`: no node of that name"):
         Machine.from_toml(bad, "m.toml")
-    # the command line: --start identified writes the fitted start's simulation; without it, on a
-    # run of the identification run's name, a note says what the stated figures are from
+    # the command line: --start fitted writes the fitted start's simulation; without it, on a run
+    # of the fitted run's name, a note says what the file's figures are from
     syn.write_run_csv(tmp_path / "run.csv", c.train)
     (tmp_path / "m.toml").write_text(s["toml"])
     out = tmp_path / "pred.csv"
     args = ["predict", str(tmp_path / "run.csv"), "--machine", str(tmp_path / "m.toml"), "--out", str(out)]
-    assert main([*args, "--start", "identified"]) == 0
+    assert main([*args, "--start", "fitted"]) == 0
     assert "note" not in capsys.readouterr().out
     read = tr.read_run(tmp_path / "run.csv")
-    np.testing.assert_allclose(tr.read_run(out)["E_z_pred"], m.simulate(read, initial_k="identified").drift["E_z"],
+    np.testing.assert_allclose(tr.read_run(out)["E_z_pred"], m.simulate(read, initial_k="fitted").drift["E_z"],
                                rtol=0, atol=5e-7)  # 6 decimals written
     assert main(args) == 0
-    assert "its stated figures are from the start fitted there" in capsys.readouterr().out
-    assert main([*args, "--start", "identified", "--fit-initial", "3"]) == 2
+    assert "from a start of their own" in capsys.readouterr().out
+    assert main([*args, "--start", "fitted", "--fit-initial", "3"]) == 2
+    # thermerr calibrate states both figures and writes its start
+    cal_out = tmp_path / "cal.toml"
+    assert main(["calibrate", str(tmp_path / "run.csv"), "--machine", str(tmp_path / "m.toml"),
+                 "--out", str(cal_out), "--json"]) == 0
+    js = json.loads(capsys.readouterr().out)
+    back = Machine.load(cal_out)
+    assert js["rmse_um"] == pytest.approx(rms(back.simulate(read, initial_k="fitted").drift["E_z"] - read["E_z"]))
+    assert js["first_reading_rmse_um"] == pytest.approx(rms(back.simulate(read).drift["E_z"] - read["E_z"]))
 
 
 def test_a_full_fit_never_ends_worse_than_the_screen_it_nests():

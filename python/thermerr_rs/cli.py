@@ -461,16 +461,16 @@ def cmd_predict(args: argparse.Namespace) -> int:
     run = _read(args, args.run)
     after = _read(args, args.after) if args.after else None
     _piece_note(args, run, after, "the network starts from its own first readings, with zero drift there")
-    if args.start == "identified" and args.fit_initial:
-        raise ThermerrError("--start identified and --fit-initial both set the start: give one")
-    ident = machine.to_dict().get("identified") or {}
-    if (args.start == "first" and not args.fit_initial and after is None and ident.get("initial_k")
-            and os.path.basename(run.source) == os.path.basename(str(ident.get("source")))):
-        _say(args, f"note: {args.machine} was identified from a run named {ident['source']}, and its stated figures "
-                   "are from the start fitted there; this simulation starts from the first readings as they are "
-                   "(--start identified starts from the fitted start)")
+    if args.start == "fitted" and args.fit_initial:
+        raise ThermerrError("--start fitted and --fit-initial both set the start: give one")
+    fitted = machine.to_dict().get("start") or {}
+    if (args.start == "first" and not args.fit_initial and after is None and fitted
+            and os.path.basename(run.source) == os.path.basename(str(fitted.get("run")))):
+        _say(args, f"note: {args.machine}'s values were fitted on a run named {fitted['run']} from a start of "
+                   "their own; this simulation starts from the first readings as they are (--start fitted "
+                   "starts from the fitted start, as the file's figures do)")
     sim = machine.simulate(run, fit_initial=args.fit_initial, after=after,
-                           initial_k="identified" if args.start == "identified" else None)
+                           initial_k="fitted" if args.start == "fitted" else None)
     stamps = _iso_stamps(args.run, args.delimiter, run)
     cols: dict[str, Any] = {"time": stamps} if stamps is not None else {"time_s": run.time_s}
     cols.update({f"{a}_pred": v for a, v in sim.drift.items()})
@@ -522,6 +522,8 @@ def cmd_init(args: argparse.Namespace) -> int:
 
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from .thermal import Machine
 
     _check_out(args.out, args.run, args.machine)
@@ -529,12 +531,22 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     run = _read(args, args.run)
     _stage(args, f"calibrating {args.machine} on {run.source} ...")
     cal, info = machine.calibrate(run, args.axis)
+    axis = args.axis or machine.axes[0]
+    rmse = lambda pred: float(np.sqrt(np.mean((pred - run[axis]) ** 2)))  # noqa: E731
+    info = {"axis": axis, **info, "rmse_um": rmse(cal.simulate(run, initial_k="fitted").drift[axis]),
+            "first_reading_rmse_um": rmse(cal.simulate(run).drift[axis])}
     cal.save(args.out)
     if args.json:
         _print_json(info)
-    else:
-        _say(args, f"calibrated {args.machine} on {run.source} ({info['n_iter']} iterations, "
-                   f"normalised RMS residual {(info['ssr'] / info['n_data']) ** 0.5:.2f}); wrote {args.out}")
+        return 0
+    _say(args, f"calibrated {args.machine} on {run.source} ({info['n_iter']} iterations, "
+               f"normalised RMS residual {(info['ssr'] / info['n_data']) ** 0.5:.2f}); wrote {args.out}")
+    _say(args, f"{axis}: RMS {info['rmse_um']:.3f} µm on {run.source} from the start fitted with the values ([start] "
+               f"in {args.out}; thermerr predict --start fitted), {info['first_reading_rmse_um']:.3f} µm from the "
+               "first readings as they are")
+    if not info["converged"]:
+        _say(args, f"note: the search stopped at its iteration limit ({info['n_iter']}) without settling: the values "
+                   "are where it stopped, not a solution to rely on")
     return 0
 
 
@@ -794,10 +806,10 @@ def build_parser() -> argparse.ArgumentParser:
     pr.add_argument("--out", required=True, help="CSV to write: time_s, E_<axis>_pred, T_<sensor>_pred")
     pr.add_argument("--fit-initial", type=_nonneg_int, default=0, metavar="N",
                     help="estimate the sensed nodes' start from the first N readings (default: first reading)")
-    pr.add_argument("--start", choices=["first", "identified"], default="first",
-                    help="the nodes' start: their first readings as they are (default), or 'identified': the "
-                         "start thermerr init fitted on the run it identified the machine from ([identified] "
-                         "initial_k), which the file's stated figures are from")
+    pr.add_argument("--start", choices=["first", "fitted"], default="first",
+                    help="the nodes' start: their first readings as they are (default), or 'fitted': the start "
+                         "the machine's values were fitted from (its [start] table, written by init, calibrate "
+                         "and diagnose), for the run it names")
     pr.add_argument("--after", metavar="EARLIER.csv",
                     help="the run is a later piece of a log whose earlier rows are EARLIER.csv: simulate from "
                          "EARLIER.csv's start (drift relative to the log's start) and write the run's rows")

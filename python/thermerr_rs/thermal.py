@@ -95,14 +95,16 @@ class Machine:
         return self._inner.to_toml()
 
     @property
-    def identified_start(self) -> dict[str, float]:
-        """The start ``thermerr init`` fitted on the run it identified this network from (K added
-        to each node's first reading; ``[identified] initial_k``): the start of the figures the
-        file states. Raises :class:`DataError` for a machine without one."""
-        start = (self.to_dict().get("identified") or {}).get("initial_k")
-        if not start:
-            raise DataError(f"machine {self.name!r} has no identified start ([identified] initial_k): "
-                            "it was not identified by this version of thermerr init")
+    def fitted_start(self) -> dict[str, float]:
+        """The start the machine's values were fitted from (``thermerr init``, ``calibrate``, a
+        diagnosis's TOMLs): K added to each node's first reading, on the run named in the file's
+        ``[start]`` table (``to_dict()["start"]["run"]``). Its figures are from that start;
+        another run starts from its own readings. Raises :class:`DataError` for a machine
+        without one (written by hand, or by an older version)."""
+        start = (self.to_dict().get("start") or {}).get("initial_k")
+        if start is None:
+            raise DataError(f"machine {self.name!r} has no fitted start (no [start] table): its values "
+                            "were not fitted by thermerr init, calibrate or diagnose")
         return {str(k): float(v) for k, v in start.items()}
 
     def to_dict(self) -> dict[str, Any]:
@@ -136,14 +138,14 @@ class Machine:
         return self._inner.columns()
 
     def simulate(self, run: Run, *, fit_initial: int = 0,
-                 initial_k: dict[str, float] | Literal["identified"] | None = None,
+                 initial_k: dict[str, float] | Literal["fitted"] | None = None,
                  after: Run | None = None) -> Simulation:
         """Simulate ``run`` from its inputs and boundary columns. ``fit_initial=N`` estimates the
         sensed nodes' initial temperatures from the first N readings (least squares) instead of
         taking the first reading as it is; ``initial_k`` gives the start instead, K added to each
-        named node's start (a diagnosis report's ``baseline.initial_k`` reproduces its figures;
-        ``"identified"``: the start ``thermerr init`` fitted on its run, the file's
-        ``[identified] initial_k``, which its stated figures are from).
+        named node's start (a diagnosis report's ``baseline.initial_k`` reproduces its figures);
+        ``"fitted"``: the start the file's values were fitted from (:attr:`fitted_start`), for
+        the run it names.
 
         ``after``: ``run`` is a later piece of a log whose earlier rows are ``after``. The network
         starts from ``after``'s first readings and runs on through the join
@@ -151,8 +153,8 @@ class Machine:
         measured error is; the result holds ``run``'s rows only. Without it the network starts
         from ``run``'s own first readings, with zero drift there."""
         whole = run if after is None else run.following(after)
-        if initial_k == "identified":
-            initial_k = self.identified_start
+        if initial_k == "fitted":
+            initial_k = self.fitted_start
         d = self._inner.simulate(*_run_args(whole), fit_initial=int(fit_initial),
                                  initial_k=None if initial_k is None else {str(k): float(v) for k, v in initial_k.items()})
         if after is None:

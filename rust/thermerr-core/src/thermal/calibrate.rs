@@ -10,7 +10,7 @@
 
 use std::collections::BTreeMap;
 
-use super::machine::{Machine, NodeSpec};
+use super::machine::{FittedStart, Machine, NodeSpec};
 use super::sim::{
     drift_terms, finish, lag, median_step, simulate_nodes, simulate_nodes_on, Init, RunView,
     Simulation, Steps, Thinned,
@@ -710,7 +710,11 @@ fn calibrate_all_rows(
         (res.x, res.n_iter, res.converged)
     };
     let (mm, init) = apply(m, &free, &x);
-    let (fitted, _, r) = evaluate(&mm, &init, run, &tg, rows, sigma_t, sigma_e, true)?;
+    let (mut fitted, _, r) = evaluate(&mm, &init, run, &tg, rows, sigma_t, sigma_e, true)?;
+    fitted.start = Some(FittedStart {
+        run: run.source.to_string(),
+        initial_k: named_offsets(&fitted, &init),
+    });
     let ssr: f64 = r.iter().map(|v| v * v).sum();
     if !ssr.is_finite() {
         return Err(Error::Numerical(format!(

@@ -63,7 +63,7 @@ use serde::Serialize;
 
 use super::calibrate::{calibrate, evaluate, targets, Calibration, CalibrationOptions, Reading};
 use super::machine::{
-    bad, Ambient, DriftSpec, Identified, LinkSpec, Machine, NodeSpec, SourceSpec,
+    bad, Ambient, DriftSpec, FittedStart, Identified, LinkSpec, Machine, NodeSpec, SourceSpec,
 };
 use super::sim::{lag, simulate, Init, RunView};
 use crate::error::{Error, Result};
@@ -192,7 +192,7 @@ pub struct NodeInfo {
 #[derive(Clone, Debug, Serialize)]
 pub struct AxisFit {
     pub axis: String,
-    /// From the start the calibration fitted on the training rows (`Identified::initial_k`).
+    /// From the start the calibration fitted on the training rows (`[start]`).
     pub train_rmse_um: f64,
     pub holdout_rmse_um: f64,
     /// From the sensors' first readings as they are: where a simulation of a run starts unless
@@ -1497,6 +1497,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             sources: sources.clone(),
             drift: drift.clone(),
             identified: None,
+            start: None,
         };
         start_machine.validate(&format!("{file} (identified start)"))?;
         if let Some(e) = equation_error_start(&start_machine, &names, &powers, &ee_a, &ee_b, &ee_c)
@@ -1587,7 +1588,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             *v = sig4(*v);
         }
     }
-    // the start is written to the file too (`[identified] initial_k`), rounded as the rest
+    // the start is written to the file too (`[start]`), rounded as the rest
     let init: Vec<f64> = cal.init.iter().map(|&v| sig4(v)).collect();
     let sim = simulate(&machine, &view, &Init::Offsets(init.clone()))?;
     let plain = simulate(&machine, &view, &Init::FirstReading)?;
@@ -1628,11 +1629,11 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             .collect();
         notes.push(format!(
             "the training and held-out figures are from the start the calibration fitted on the \
-             training rows (`[identified] initial_k`: {}); from the sensors' first readings as \
+             training rows (`[start] initial_k`: {}); from the sensors' first readings as \
              they are, where a simulation starts a run (`thermerr predict`), they are more than \
              twice as large on {}: the drift map carries a start offset on through the run \
              (longest on a slow node), so on another run its figures lean on a start no sensor \
-             gives; `thermerr predict RUN --start identified` simulates this run from the fitted \
+             gives; `thermerr predict RUN --start fitted` simulates this run from the fitted \
              start",
             offs.join(", "),
             leaning.join(", ")
@@ -1675,12 +1676,10 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             .iter()
             .map(|a| (a.axis.clone(), sig4(a.holdout_rmse_um)))
             .collect(),
-        initial_k: names
-            .iter()
-            .zip(&init)
-            .filter(|(_, &k)| k != 0.0)
-            .map(|(nm, &k)| (nm.clone(), k))
-            .collect(),
+    });
+    machine.start = Some(FittedStart {
+        run: file.clone(),
+        initial_k: super::calibrate::named_offsets(&machine, &init),
     });
     let mut infos = Vec::new();
     for i in 0..nn {
@@ -1984,21 +1983,28 @@ fn commented_toml(id: &Identification) -> Result<String> {
         for (key, map) in [
             ("train_rmse_um", &p.train_rmse_um),
             ("holdout_rmse_um", &p.holdout_rmse_um),
-            ("initial_k", &p.initial_k),
         ] {
-            if key == "initial_k" {
-                if map.is_empty() {
-                    continue;
-                }
-                line("# the start those figures are from: K added to each node's first reading,");
-                line("# fitted on the training rows (`thermerr predict --start identified`)");
-            }
             let parts: Vec<String> = map
                 .iter()
                 .map(|(k, v)| format!("{} = {}", toml_key(k), num(*v)))
                 .collect();
             line(&format!("{key} = {{ {} }}", parts.join(", ")));
         }
+    }
+    if let Some(st) = &m.start {
+        line("");
+        line(
+            "# the start the figures above are from: K added to each node's first reading, fitted",
+        );
+        line("# on the training rows of this run (`thermerr predict RUN --start fitted`)");
+        line("[start]");
+        line(&format!("run = {}", q(&st.run)));
+        let parts: Vec<String> = st
+            .initial_k
+            .iter()
+            .map(|(k, v)| format!("{} = {}", toml_key(k), num(*v)))
+            .collect();
+        line(&format!("initial_k = {{ {} }}", parts.join(", ")));
     }
     Ok(o)
 }

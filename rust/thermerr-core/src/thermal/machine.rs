@@ -126,6 +126,9 @@ pub struct Machine {
     /// Present when the network was identified from data by `thermerr init`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub identified: Option<Identified>,
+    /// Present when the values were fitted (`init`, `calibrate`, a diagnosis): their start.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<FittedStart>,
 }
 
 /// The `[identified]` table: where an identified network came from (`thermerr init`), kept in
@@ -141,14 +144,27 @@ pub struct Identified {
     /// The ambient column's rule (`given`, `named`, `coldest`) and the node count's rule.
     pub ambient_rule: String,
     pub node_rule: String,
-    /// Each axis's training and held-out RMS (µm) right after identification.
+    /// Each axis's training and held-out RMS (µm) right after identification, from the start
+    /// in `[start]`.
     #[serde(default)]
     pub train_rmse_um: BTreeMap<String, f64>,
     #[serde(default)]
     pub holdout_rmse_um: BTreeMap<String, f64>,
-    /// The start those figures are from: K added to each named node's first reading (its
-    /// sensor's, or the ambient's for an unsensed node), fitted on the training rows.
-    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+}
+
+/// The `[start]` table: the start a calibration fitted along with the file's values, on the run
+/// it names. A simulation starts each node from its first reading (formats.md); a calibration
+/// also fits an offset to that (±1 K), and the file's values, its figures and a diagnosis's were
+/// fitted from that start. It belongs to that run: another run starts from its own readings
+/// unless told otherwise (`Machine.simulate(run, initial_k="fitted")`,
+/// `thermerr predict --start fitted`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FittedStart {
+    /// The run the start was fitted on, as it was named.
+    pub run: String,
+    /// K added to each named node's first reading (its sensor's, or the ambient's for an
+    /// unsensed node).
     pub initial_k: BTreeMap<String, f64>,
 }
 
@@ -175,15 +191,13 @@ pub(crate) fn bad(file: &str, entry: impl Into<String>, reason: impl Into<String
 }
 
 impl Machine {
-    /// A copy to write fitted values into. An identified network's start (`[identified]
-    /// initial_k`) is the start of the file's own figures, not of a refitted machine's: the copy
-    /// drops it, so that `--start identified` is refused rather than misapplied.
+    /// A copy to write fitted values into: without the `[start]` the old values were fitted
+    /// from, which is not the start of the new ones (the fit that ends sets its own).
     pub fn refit_copy(&self) -> Machine {
-        let mut out = self.clone();
-        if let Some(id) = out.identified.as_mut() {
-            id.initial_k.clear();
+        Machine {
+            start: None,
+            ..self.clone()
         }
-        out
     }
 
     /// Reads and validates a machine TOML file.
@@ -411,9 +425,9 @@ impl Machine {
                 "reaches neither the ambient nor a boundary through its links: the network is singular",
             ));
         }
-        if let Some(id) = &self.identified {
-            for (name, k) in &id.initial_k {
-                let at = format!("identified.initial_k `{name}`");
+        if let Some(st) = &self.start {
+            for (name, k) in &st.initial_k {
+                let at = format!("start.initial_k `{name}`");
                 if !index.contains_key(name.as_str()) {
                     return Err(bad(file, at, "no node of that name"));
                 }
