@@ -396,6 +396,15 @@ pub struct Holdout {
 }
 
 impl Holdout {
+    /// Frees the held-out series, keeping the figures: a candidate's series serve its own
+    /// scoring (`sensor_gain_pct`) and, for a round's winner, the next round's; a candidate that
+    /// did not win round 1 is kept in the report for its figures only (on a 1-s log the series
+    /// of a round's candidates are hundreds of MB).
+    pub fn drop_series(&mut self) {
+        self.predicted = Vec::new();
+        self.sensor_residuals = Vec::new();
+    }
+
     /// The held-out temperature residual of sensor column `col`.
     pub fn sensor_residual(&self, col: &str) -> Option<&[f64]> {
         self.sensor_residuals
@@ -807,13 +816,18 @@ fn diagnose_on(
         failed: &failed,
     };
     stage_s.insert("baseline", clock.elapsed().as_secs_f64());
-    let (cands, untried_columns) = round_candidates(&cx, m, &base, &[], &[])?;
+    let (mut cands, untried_columns) = round_candidates(&cx, m, &base, &[], &[])?;
     stage_s.insert(
         "round_1",
         clock.elapsed().as_secs_f64() - stage_s["baseline"],
     );
     let noise = baseline.sigma_e;
     let (verdict1, chosen1) = verdict::rule(&cands, &base_hold, noise, opts);
+    for (k, c) in cands.iter_mut().enumerate() {
+        if Some(k) != chosen1 {
+            c.holdout.drop_series();
+        }
+    }
     let outcome = rounds::run(
         &rounds::Context {
             nominal: m,
