@@ -263,3 +263,40 @@ def test_the_table_and_summary_carry_a_verdicts_alternatives(tmp_path):
     with open(tmp_path / "fleet-summary.csv", newline="") as fh:
         got = [(r["alternatives"], r["suspect"]) for r in csv.DictReader(fh)]
     assert got == [("T_b,T_c", ""), ("", "T_d,T_e")]
+
+
+def test_diagnose_takes_every_axis_of_the_machine_as_thermerr_diagnose(tmp_path, capsys):
+    """A machine of three axes (the bundled HMC): by default each run is diagnosed on every
+    axis, with the same figures as diagnose_axes() on that run alone, written as `thermerr
+    diagnose` writes several axes; the summary has a column per axis and figure, the table a line
+    per axis. One --axis keeps the one-axis layout; an axis the machine lacks is refused first."""
+    d = tmp_path / "hmc"
+    d.mkdir()
+    for n in ("hmc_run1", "hmc_run2"):
+        shutil.copy(EXAMPLES / f"{n}.csv", d / f"{n}.csv")
+    machine = EXAMPLES / "hmc_machine.toml"
+    out = tmp_path / "out"
+    rows = fleet.diagnose_runs(d, machine, out)
+    axes = tr.Machine.load(machine).axes
+    assert len(axes) == 3 and all(r.ok for r in rows)
+    for r in rows:
+        ref = tr.diagnose_axes(tr.read_run(d / f"{r.name}.csv"), tr.Machine.load(machine), progress=False)
+        assert r.figures["axes"] == ",".join(axes)
+        for a in axes:
+            assert r.figures[f"{a}.verdict"] == ref[a].verdict
+            assert r.figures[f"{a}.baseline_rms"] == ref[a].report["baseline"]["rmse_um"]
+            assert r.figures[f"{a}.extended_rms"] == ref[a].report["extended"]["rmse_um"]
+            assert r.figures[f"{a}.remainder_um"] == ref[a].remainder_um
+            assert (out / r.name / f"{a}.report.json").exists() and (out / r.name / f"{a}.extended.toml").exists()
+        assert json.loads((out / r.name / "report.json").read_text())["axes"] == axes
+    with open(out / "fleet-summary.csv", newline="") as f:
+        header = next(csv.reader(f))
+    assert {f"{a}.verdict" for a in axes} <= set(header)
+    lines = fleet.table(rows).splitlines()
+    assert len(lines) == 1 + 2 * len(axes) and lines[1].split()[:3] == ["hmc_run1", "ok", axes[0]]
+    # one axis: the one-axis layout and figures
+    one = fleet.diagnose_runs(d / "hmc_run1.csv", machine, tmp_path / "one", axis="E_y")
+    assert one[0].figures["axis"] == "E_y" and (tmp_path / "one" / "hmc_run1" / "report.json").exists()
+    assert main(["fleet", "diagnose", str(d), "--machine", str(machine), "--out", str(tmp_path / "bad"),
+                 "--axis", "E_q"]) == 2
+    assert "E_q" in capsys.readouterr().err and not (tmp_path / "bad").exists()

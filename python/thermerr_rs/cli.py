@@ -894,7 +894,10 @@ def build_parser() -> argparse.ArgumentParser:
     fld = flsub.add_parser("diagnose", help="diagnose every run against one machine model, a report per run")
     fld.add_argument("runs", nargs="+", help=runs_help)
     fld.add_argument("--machine", required=True, help="nominal machine TOML")
-    fld.add_argument("--axis", default=None, help="error axis (default: the machine's first)")
+    fld.add_argument("--axis", action="append", default=None,
+                     help="error axis; repeat for several (default: every drift entry of the machine, as thermerr "
+                          "diagnose). Several axes write OUT/<run>/ as thermerr diagnose does: a summary report and "
+                          "<axis>.report.*")
     fld.add_argument("--network", choices=NETWORK_RULES, default="auto",
                      help="the baseline's thermal network, as for thermerr diagnose (default auto)")
     fld.add_argument("--out", required=True,

@@ -250,25 +250,39 @@ def _evaluate_task(path: str, model_json: str, axis: str | None, nan: str) -> Ru
     return _guarded(path, work)
 
 
-def _diagnose_task(path: str, machine_toml: str, machine_file: str, axis: str | None,
+def _diagnosis_figures(d: Any) -> dict[str, Any]:
+    """One axis's diagnosis as summary figures."""
+    b, e = d.report["baseline"], d.report["extended"]
+    alts = [a["column"] for a in d.causes[0]["alternatives"]] if d.column and d.causes else []
+    return {"verdict": d.verdict, "column": d.column, "alternatives": ",".join(alts), "gain_pct": d.gain_pct,
+            "baseline_rms": float(b["rmse_um"]), "extended_rms": float(e["rmse_um"]),
+            "remainder_um": float(d.remainder_um), "baseline_unique": d.baseline_unique}
+
+
+def _diagnose_task(path: str, machine_toml: str, machine_file: str, axes: list[str],
                    holdout_fraction: float, nan: str, out_dir: str, network: str) -> RunResult:
     def work() -> tuple[str | None, dict[str, Any]]:
         from .run import read_run
-        from .thermal import Machine, diagnose
+        from .thermal import Machine, diagnose, diagnose_axes
 
         machine = Machine.from_toml(machine_toml, machine_file)
         run = read_run(path, nan=nan)  # type: ignore[arg-type]
-        d = diagnose(run, machine, axis=axis, holdout_fraction=holdout_fraction, network=network,
-                     progress=False)
         target = Path(out_dir) / Path(path).stem
-        d.write(target)
-        b, e = d.report["baseline"], d.report["extended"]
-        alts = [a["column"] for a in d.causes[0]["alternatives"]] if d.column and d.causes else []
-        suspect = sorted({sp["column"] for sp in d.report.get("suspect_readings", [])})
-        return str(target), _finite({"verdict": d.verdict, "column": d.column, "alternatives": ",".join(alts),
-                                     "suspect": ",".join(suspect), "gain_pct": d.gain_pct,
-                                     "baseline_rms": float(b["rmse_um"]), "extended_rms": float(e["rmse_um"]),
-                                     "baseline_unique": d.baseline_unique})
+        if len(axes) == 1:
+            d = diagnose(run, machine, axis=axes[0], holdout_fraction=holdout_fraction, network=network,
+                         progress=False)
+            d.write(target)
+            suspect = sorted({sp["column"] for sp in d.report.get("suspect_readings", [])})
+            return str(target), _finite({"axis": axes[0], **_diagnosis_figures(d), "suspect": ",".join(suspect)})
+        # several axes, as `thermerr diagnose` writes them: a summary and <axis>.report.* per axis
+        multi = diagnose_axes(run, machine, axes=axes, holdout_fraction=holdout_fraction, network=network,
+                              progress=False)
+        multi.write(target)
+        figures: dict[str, Any] = {"axes": ",".join(multi.axes)}
+        for a in multi.axes:
+            figures.update({f"{a}.{k}": v for k, v in _diagnosis_figures(multi[a]).items()})
+        figures["suspect"] = ",".join(sorted({sp["column"] for sp in multi.report["suspect_readings"]}))
+        return str(target), _finite(figures)
 
     return _guarded(path, work)
 
@@ -357,31 +371,42 @@ def write_summary(results: Sequence[RunResult], out_dir: str | os.PathLike[str])
 def table(results: Sequence[RunResult]) -> str:
     """The records as a plain-text table, one line per run: its name, ``ok`` or ``FAILED``, the
     main figures (RMS residual and compensation rate, or the diagnosis verdict and held-out
-    RMS), and the output or the error message."""
+    RMS), and the output or the error message. A diagnosis of several axes takes a line per
+    axis."""
 
-    def figs(r: RunResult) -> str:
+    def figs(r: RunResult) -> list[str]:
         f = r.figures
         if not r.ok:
-            return ""
-        if "verdict" in f:
+            return [""]
+        if "verdict" in f or "axes" in f:
             from .report import also
 
-            alts = also(f["alternatives"].split(",") if f.get("alternatives") else [])
-            col = f" ({f['column']}{alts})" if f.get("column") else ""
+            def one(pre: str) -> str:
+                alts = also(f[pre + "alternatives"].split(",") if f.get(pre + "alternatives") else [])
+                col = f" ({f[pre + 'column']}{alts})" if f.get(pre + "column") else ""
+                return (f"{f[pre + 'verdict']}{col}: RMS {f[pre + 'baseline_rms']:.3f} -> "
+                        f"{f[pre + 'extended_rms']:.3f} µm, gain {f[pre + 'gain_pct']:.1f} %")
+
             sus = f"; suspect readings in {f['suspect'].replace(',', ', ')}" if f.get("suspect") else ""
-            return (f"{f['verdict']}{col}: RMS {f['baseline_rms']:.3f} -> {f['extended_rms']:.3f} µm, "
-                    f"gain {f['gain_pct']:.1f} %{sus}")
+            if "axes" in f:
+                lines = [f"{a} {one(a + '.')}" for a in f["axes"].split(",")]
+                return [*lines[:-1], lines[-1] + sus]
+            return [one("") + sus]
         rate = f.get("compensation_rate")
         rate_s = "n/a" if rate is None else f"{100 * rate:.1f} %"
-        return f"{f['axis']}: n {f['n']}, RMS {f['rms']:.4g} µm, max {f['max_abs']:.4g} µm, compensation {rate_s}"
+        return [f"{f['axis']}: n {f['n']}, RMS {f['rms']:.4g} µm, max {f['max_abs']:.4g} µm, compensation {rate_s}"]
 
-    rows = [(r.name, "ok" if r.ok else "FAILED", figs(r), (r.out or "") if r.ok else (r.error or "")) for r in results]
+    rows: list[tuple[str, str, str, str]] = []
+    for r in results:
+        lines = figs(r)
+        rows.append((r.name, "ok" if r.ok else "FAILED", lines[0], (r.out or "") if r.ok else (r.error or "")))
+        rows.extend(("", "", more, "") for more in lines[1:])
     head = ("run", "status", "figures", "output / error")
     widths = [max(len(h), *(len(row[k]) for row in rows)) for k, h in enumerate(head[:3])]
-    lines = []
+    out = []
     for row in (head, *rows):
-        lines.append("  ".join(c.ljust(w) for c, w in zip(row[:3], widths)) + "  " + row[3])
-    return "\n".join(line.rstrip() for line in lines)
+        out.append("  ".join(c.ljust(w) for c, w in zip(row[:3], widths)) + "  " + row[3])
+    return "\n".join(line.rstrip() for line in out)
 
 
 # -- the public functions --------------------------------------------------------------------
@@ -463,7 +488,7 @@ def diagnose_runs(
     machine: Any,
     out_dir: str | os.PathLike[str],
     *,
-    axis: str | None = None,
+    axis: str | Sequence[str] | None = None,
     holdout_fraction: float = 0.3,
     nan: Literal["error", "drop", "interpolate"] = "error",
     network: str = "auto",
@@ -471,16 +496,25 @@ def diagnose_runs(
     workers: int | None = None,
 ) -> list[RunResult]:
     """Diagnose every run against one nominal machine (a :class:`~thermerr_rs.Machine` or its
-    TOML file) and write each report into ``out_dir/<stem>/`` (``report.json``, ``report.html``,
-    ``calibrated.toml``, ``extended.toml``). Each run is calibrated on its first 70 % and scored
-    on the rest (``holdout_fraction``). ``figures``: ``verdict``, ``column`` (with
+    TOML file) on ``axis`` (one axis, several, or by default every axis of the machine, as
+    ``thermerr diagnose``) and write each report into ``out_dir/<stem>/``: for one axis
+    ``report.json``, ``report.html``, ``calibrated.toml``, ``extended.toml``; for several, as
+    :meth:`~thermerr_rs.thermal.AxesDiagnosis.write`, the summary ``report.json`` and
+    ``report.html`` and per axis ``<axis>.report.json``, ``<axis>.report.html``,
+    ``<axis>.calibrated.toml``, ``<axis>.extended.toml``. Each run is calibrated on its first
+    70 % and scored on the rest (``holdout_fraction``). ``figures`` for one axis: ``axis``,
+    ``verdict``, ``column`` (with
     ``alternatives``: the other columns that explain the held-out error as well, comma-separated,
     as ``sensors`` of a fit; see :attr:`~thermerr_rs.thermal.Diagnosis.causes`), ``suspect``
     (the columns with suspect readings, comma-separated: a jump or a frozen reading, or
     ``time_s`` for a gap in the log, listed in the run's ``report.json`` as
     ``suspect_readings``), ``gain_pct``,
-    ``baseline_rms`` and ``extended_rms`` (held-out, µm), and ``baseline_unique`` (False where a
-    recalibrated baseline has a second solution: :attr:`~thermerr_rs.thermal.Diagnosis.baseline_unique`).
+    ``baseline_rms`` and ``extended_rms`` (held-out, µm), ``remainder_um`` (the unexplained
+    remainder) and ``baseline_unique`` (False where a
+    recalibrated baseline has a second solution: :attr:`~thermerr_rs.thermal.Diagnosis.baseline_unique`);
+    for several axes: ``axes`` (comma-separated), the same figures per axis as ``<axis>.verdict``,
+    ``<axis>.gain_pct``, ... (one column each in ``fleet-summary.csv``), and ``suspect``.
+    An axis the machine does not map is refused before any task starts.
     ``network``: the baseline's network
     rule, as for :func:`~thermerr_rs.thermal.diagnose`. A machine file that cannot be read, or a
     rule that is not one of them, is refused before any task starts.
@@ -492,7 +526,12 @@ def diagnose_runs(
     paths = run_paths(runs)
     if network not in NETWORK_RULES:
         raise ParameterError(f"network: `{network}` is not one of {', '.join(NETWORK_RULES)}")
-    args = (m.to_toml(), source, axis, float(holdout_fraction), nan, str(out_dir), network)
+    axes = m.axes if axis is None else [axis] if isinstance(axis, str) else list(axis)
+    unknown = [a for a in axes if a not in m.axes]
+    if unknown or not axes:
+        raise ParameterError(f"axis: {', '.join(unknown) or 'none given'}: {source} maps "
+                             f"{', '.join(m.axes) or 'no axis'}")
+    args = (m.to_toml(), source, axes, float(holdout_fraction), nan, str(out_dir), network)
     results = _compute(_diagnose_task, paths, args, scheduler, workers, "diagnose")
     write_summary(results, out_dir)
     return results
