@@ -421,6 +421,25 @@ def test_the_file_states_the_start_its_figures_are_from(tmp_path, capsys):
     assert js["first_reading_rmse_um"] == pytest.approx(rms(back.simulate(read).drift["E_z"] - read["E_z"]))
 
 
+def test_a_drift_map_whose_node_terms_cancel_is_noted():
+    """A drift map whose largest node term swings 3x or more the axis's whole drift (RMS over
+    the training rows) is a small difference of large numbers: init says so. On the simulated
+    machines the largest term is below the drift (0.34-0.69 of it); here the error is made the
+    difference of two sensors that warm nearly together (front bearing and spindle motor,
+    r(a)/r(a - 0.987 b) = 17.7), and the note names the axis."""
+    c = syn.make_case("vmc", "none", 1, hours=HOURS, dt=DT_S)
+    _, s = Machine.identify(_run(c.train, "run.csv"))
+    assert not [n for n in s["notes"] if "cancel" in n]
+    cols = dict(c.train)
+    a, b = cols["T_front_bearing"], cols["T_spindle_motor"]
+    rng = np.random.default_rng(0)
+    cols["E_z"] = 30.0 * ((a - a[0]) - 0.987 * (b - b[0])) + rng.normal(0.0, 0.1, len(a))
+    _, s = Machine.identify(_run(cols, "run.csv"))
+    (note,) = [n for n in s["notes"] if "cancel" in n]
+    assert note.startswith("the drift map's node terms cancel on E_z (") and "µm/K alone swings" in note
+    assert "# note: the drift map's node terms cancel on E_z" in s["toml"]
+
+
 def test_a_full_fit_never_ends_worse_than_the_screen_it_nests():
     # measured: on this identified lathe the full fit of the source from T_hydraulic into the
     # spindle bearing, warm-started from the baseline, stopped in a poorer minimum (ΔBIC +94:

@@ -600,6 +600,10 @@ fn lagged_copies(t: &[f64], cols: &[&[f64]], amb: &[f64]) -> Result<Vec<Option<C
 const ALT_TREES: usize = 2;
 
 /// 4 significant digits: the file is for people.
+/// A drift map's node term this many times the axis's whole drift (RMS over the training rows)
+/// is a cancellation worth a note: the terms' sum is a small difference of large numbers.
+const CANCELLING_TERMS: f64 = 3.0;
+
 fn sig4(v: f64) -> f64 {
     if v == 0.0 || !v.is_finite() {
         return v;
@@ -1607,6 +1611,45 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             first_reading_holdout_rmse_um: err(first, m..n),
             noise_um: e.noise(m),
         });
+    }
+    // a drift map whose node terms cancel: each term far larger than the axis's drift
+    let cancelling: Vec<String> = machine
+        .drift
+        .iter()
+        .filter_map(|d| {
+            let terms: Vec<(String, f64, Vec<f64>)> = d
+                .um_per_k
+                .iter()
+                .filter_map(|(name, &c)| {
+                    let k = machine.node_index(name)?;
+                    let t = sim.node(k);
+                    let rise = t[..m].iter().map(|v| c * (v - t[0])).collect();
+                    Some((name.clone(), c, rise))
+                })
+                .collect();
+            let total = rms((0..m).map(|i| terms.iter().map(|t| t.2[i]).sum::<f64>()));
+            let (name, c, big) = terms
+                .iter()
+                .map(|(nm, c, r)| (nm, *c, rms(r.iter().copied())))
+                .max_by(|a, b| a.2.total_cmp(&b.2))?;
+            (big > CANCELLING_TERMS * total.max(1e-12)).then(|| {
+                format!(
+                    "{} ({name} at {c} µm/K alone swings {big:.0} µm RMS where the axis's drift \
+                     is {total:.1} µm, {:.0}x)",
+                    d.axis,
+                    big / total.max(1e-12)
+                )
+            })
+        })
+        .collect();
+    if !cancelling.is_empty() {
+        notes.push(format!(
+            "the drift map's node terms cancel on {}: the node rises move together on this run, \
+             so least squares trades large coefficients of opposite signs against each other; \
+             they are hardly determined, and a fraction of a kelvin in one node (its start, a \
+             sensor offset, another run's duty) moves the axis by many µm",
+            cancelling.join(", ")
+        ));
     }
     // the `none` bar of a diagnosis: held-out error within it is noise
     let ratio = super::diagnose::DiagnoseOptions::default().noise_ratio;
