@@ -44,12 +44,14 @@ import io
 import json
 import math
 import os
+import threading
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal, Union
 
+from . import _core
 from ._io import write_atomic
 from .errors import MissingDependencyError, ParameterError, ThermerrError
 
@@ -127,10 +129,42 @@ def _one_line(text: str) -> str:
     return " ".join(text.split())
 
 
+# Ctrl-C on the local threads: only the main thread sees the signal, so it sets _STOP (a task
+# not yet started, or about to write, stops) and asks the running kernels to stop (_halt).
+_STOP = threading.Event()
+_ACTIVE = [0]
+_ACTIVE_LOCK = threading.Lock()
+
+
+def _unless_stopped() -> None:
+    """Raise KeyboardInterrupt once the batch was interrupted: called before a task starts and
+    before it writes, so that nothing is written after Ctrl-C."""
+    if _STOP.is_set():
+        raise KeyboardInterrupt
+
+
+def _halt(timeout_s: float = 5.0) -> None:
+    """After Ctrl-C in the main thread: stop the tasks running on the local threads. Each
+    interrupted kernel clears the core's stop request when it returns, so it is repeated until
+    no task runs (or ``timeout_s``), then withdrawn for the next call."""
+    _STOP.set()
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        with _ACTIVE_LOCK:
+            if _ACTIVE[0] == 0:
+                break
+        _core.request_interrupt()
+        time.sleep(0.02)
+    _core.clear_interrupt()
+
+
 def _guarded(path: str, work: Callable[[], tuple[str | None, dict[str, Any]]]) -> RunResult:
     """Run ``work`` for one run; any failure becomes the record's one-line ``error``."""
     name = Path(path).stem
     t0 = time.perf_counter()
+    _unless_stopped()
+    with _ACTIVE_LOCK:
+        _ACTIVE[0] += 1
     try:
         out, figures = work()
     except (KeyboardInterrupt, SystemExit, GeneratorExit):
@@ -143,6 +177,9 @@ def _guarded(path: str, work: Callable[[], tuple[str | None, dict[str, Any]]]) -
         if path not in msg and Path(path).name not in msg:
             msg = f"{path}: {msg}"
         return RunResult(path, name, False, error=msg, seconds=time.perf_counter() - t0)
+    finally:
+        with _ACTIVE_LOCK:
+            _ACTIVE[0] -= 1
     return RunResult(path, name, True, out=out, figures=figures, seconds=time.perf_counter() - t0)
 
 
@@ -228,6 +265,7 @@ def _fit_task(path: str, axis: str, model: str | Estimator, params: Mapping[str,
         est = _build(model, params, seed, y)
         est.fit_run(run, axis, names, inputs=inputs)
         train = scores(y, est.predict_run(run))
+        _unless_stopped()
         out = est.save(Path(out_dir) / f"{Path(path).stem}.json")
         return str(out), {"model": est.kind, "axis": axis, "sensors": ",".join(names), **_score_figures(train)}
 
@@ -271,12 +309,14 @@ def _diagnose_task(path: str, machine_toml: str, machine_file: str, axes: list[s
         if len(axes) == 1:
             d = diagnose(run, machine, axis=axes[0], holdout_fraction=holdout_fraction, network=network,
                          progress=False)
+            _unless_stopped()
             d.write(target)
             suspect = sorted({sp["column"] for sp in d.report.get("suspect_readings", [])})
             return str(target), _finite({"axis": axes[0], **_diagnosis_figures(d), "suspect": ",".join(suspect)})
         # several axes, as `thermerr diagnose` writes them: a summary and <axis>.report.* per axis
         multi = diagnose_axes(run, machine, axes=axes, holdout_fraction=holdout_fraction, network=network,
                               progress=False)
+        _unless_stopped()
         multi.write(target)
         figures: dict[str, Any] = {"axes": ",".join(multi.axes)}
         for a in multi.axes:
@@ -318,10 +358,15 @@ def _compute(fn: Callable[..., RunResult], paths: Sequence[Path], args: tuple[An
     if scheduler is None or scheduler in ("threads", "sync"):
         if workers is not None and workers < 1:
             raise ThermerrError(f"workers must be at least 1, got {workers}")
-        if scheduler == "sync":
-            results: list[RunResult] = list(dask.compute(*tasks, scheduler="sync"))
-        else:
-            results = list(dask.compute(*tasks, scheduler="threads", num_workers=workers))
+        _STOP.clear()
+        try:
+            if scheduler == "sync":
+                results: list[RunResult] = list(dask.compute(*tasks, scheduler="sync"))
+            else:
+                results = list(dask.compute(*tasks, scheduler="threads", num_workers=workers))
+        except KeyboardInterrupt:
+            _halt()
+            raise
         return results
     if isinstance(scheduler, str):
         client = _client_for(scheduler)

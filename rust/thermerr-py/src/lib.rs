@@ -160,9 +160,26 @@ pub(crate) fn vec_to_py(py: Python<'_>, v: Vec<f64>) -> Bound<'_, PyArray1<f64>>
     PyArray1::from_vec(py, v)
 }
 
+/// Asks every running kernel to stop at its next check, from any thread: how a caller that
+/// runs kernels on threads of its own (the fleet's dask threads, which never see a signal)
+/// passes Ctrl-C on. Each interrupted call clears the request when it returns, so the caller
+/// repeats it until its threads are done, then calls [`clear_interrupt`].
+#[pyfunction]
+fn request_interrupt() {
+    thermerr_core::interrupt::request();
+}
+
+/// Withdraws a request of [`request_interrupt`], so that the next call starts clean.
+#[pyfunction]
+fn clear_interrupt() {
+    thermerr_core::interrupt::clear();
+}
+
 #[pymodule(gil_used = false)]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add_function(wrap_pyfunction!(request_interrupt, m)?)?;
+    m.add_function(wrap_pyfunction!(clear_interrupt, m)?)?;
     m.add("FORMAT_VERSION", thermerr_core::artifact::FORMAT_VERSION)?;
     m.add(
         "NETWORK_RULES",
