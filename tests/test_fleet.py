@@ -7,11 +7,9 @@ from __future__ import annotations
 import csv
 import json
 import shutil
-import signal
 import subprocess
 import sys
 import textwrap
-import time
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +21,8 @@ distributed = pytest.importorskip("distributed", reason="thermerr_rs.fleet needs
 import thermerr_rs as tr  # noqa: E402
 from thermerr_rs import fleet  # noqa: E402
 from thermerr_rs.cli import main  # noqa: E402
+
+from _signals import ctrl_c  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 CORRUPT = "time_s,T_a,E_z\n0,20.0,0.1\n60,x,0.2\n"
@@ -337,17 +337,7 @@ def test_ctrl_c_stops_a_fleet_on_threads_and_nothing_is_written_after_it(tmp_pat
     runs.mkdir()
     p = subprocess.Popen([sys.executable, "-c", FLEET_CTRL_C, str(runs), str(out)], stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, text=True)
-    assert p.stdout is not None
-    assert p.stdout.readline().strip() == "ready"
-    time.sleep(2.0)  # inside the first two fits, which would run for hours
-    sent = time.monotonic()
-    p.send_signal(signal.SIGINT)
-    try:
-        stdout, err = p.communicate(timeout=60)
-    except subprocess.TimeoutExpired:
-        p.kill()
-        pytest.fail("the fleet went on after Ctrl-C")
-    waited = time.monotonic() - sent
+    stdout, err, waited = ctrl_c(p, 2.0, 60)  # 2 s: inside the first two fits, which would run for hours
     assert p.returncode == 130 and "interrupted" in stdout, (stdout, err)
     assert "after True" in stdout, (stdout, err)
     assert not list(out.glob("*.json")) if out.exists() else True  # no model, no summary

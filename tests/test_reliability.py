@@ -6,11 +6,9 @@ from __future__ import annotations
 import json
 import re
 import os
-import signal
 import subprocess
 import sys
 import textwrap
-import time
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +18,7 @@ import thermerr_rs as tr
 from thermerr_rs import _io
 from thermerr_rs.cli import _exit_code, main
 
+from _signals import ctrl_c
 from conftest import EXAMPLES
 
 VMC = EXAMPLES / "vmc_run.csv"
@@ -302,17 +301,7 @@ def test_ctrl_c_stops_a_long_tuning(progress):
     # leaves room for a loaded CI machine) and must not be swallowed by the progress bar
     p = subprocess.Popen([sys.executable, "-c", TUNE % progress], stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, text=True)
-    assert p.stdout is not None
-    assert p.stdout.readline().strip() == "ready"
-    time.sleep(3.0)  # well inside the search
-    sent = time.monotonic()
-    p.send_signal(signal.SIGINT)
-    try:
-        out, err = p.communicate(timeout=15)
-    except subprocess.TimeoutExpired:
-        p.kill()
-        pytest.fail("the search went on after Ctrl-C")
-    waited = time.monotonic() - sent
+    out, err, waited = ctrl_c(p, 3.0, 15)  # 3 s: well inside the search
     assert p.returncode == 130 and "interrupted" in out, (out, err)
     assert waited < 10, waited
 

@@ -2006,12 +2006,7 @@ fn commented_toml(id: &Identification) -> Result<String> {
         ));
         line("[[drift]]");
         line(&format!("axis = {}", q(&d.axis)));
-        let parts: Vec<String> = d
-            .um_per_k
-            .iter()
-            .map(|(k, v)| format!("{} = {}", toml_key(k), num(*v)))
-            .collect();
-        line(&format!("um_per_k = {{ {} }}", parts.join(", ")));
+        line(&format!("um_per_k = {}", inline_table(&d.um_per_k)));
     }
     if let Some(p) = &m.identified {
         line("");
@@ -2027,11 +2022,7 @@ fn commented_toml(id: &Identification) -> Result<String> {
             ("train_rmse_um", &p.train_rmse_um),
             ("holdout_rmse_um", &p.holdout_rmse_um),
         ] {
-            let parts: Vec<String> = map
-                .iter()
-                .map(|(k, v)| format!("{} = {}", toml_key(k), num(*v)))
-                .collect();
-            line(&format!("{key} = {{ {} }}", parts.join(", ")));
+            line(&format!("{key} = {}", inline_table(map)));
         }
     }
     if let Some(st) = &m.start {
@@ -2042,14 +2033,18 @@ fn commented_toml(id: &Identification) -> Result<String> {
         line("# on the training rows of this run (`thermerr predict RUN --start fitted`)");
         line("[start]");
         line(&format!("run = {}", q(&st.run)));
-        let parts: Vec<String> = st
-            .initial_k
-            .iter()
-            .map(|(k, v)| format!("{} = {}", toml_key(k), num(*v)))
-            .collect();
-        line(&format!("initial_k = {{ {} }}", parts.join(", ")));
+        line(&format!("initial_k = {}", inline_table(&st.initial_k)));
     }
     Ok(o)
+}
+
+/// `{ a = 1.0, b = 2.5 }`: a TOML inline table of numbers by name.
+fn inline_table(map: &std::collections::BTreeMap<String, f64>) -> String {
+    let parts: Vec<String> = map
+        .iter()
+        .map(|(k, v)| format!("{} = {}", toml_key(k), num(*v)))
+        .collect();
+    format!("{{ {} }}", parts.join(", "))
 }
 
 fn toml_key(k: &str) -> String {
