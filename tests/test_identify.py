@@ -411,6 +411,11 @@ def test_the_file_states_the_start_its_figures_are_from(tmp_path, capsys):
     assert main(args) == 0
     assert "from a start of their own" in capsys.readouterr().out
     assert main([*args, "--start", "fitted", "--fit-initial", "3"]) == 2
+    capsys.readouterr()
+    syn.write_run_csv(tmp_path / "other.csv", c.train)
+    assert main(["predict", str(tmp_path / "other.csv"), "--machine", str(tmp_path / "m.toml"), "--out", str(out),
+                 "--start", "fitted"]) == 0
+    assert "the fitted start belongs to the run run.csv, not to" in capsys.readouterr().out
     # thermerr calibrate states both figures and writes its start
     cal_out = tmp_path / "cal.toml"
     assert main(["calibrate", str(tmp_path / "run.csv"), "--machine", str(tmp_path / "m.toml"),

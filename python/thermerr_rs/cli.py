@@ -464,11 +464,15 @@ def cmd_predict(args: argparse.Namespace) -> int:
     if args.start == "fitted" and args.fit_initial:
         raise ThermerrError("--start fitted and --fit-initial both set the start: give one")
     fitted = machine.to_dict().get("start") or {}
-    if (args.start == "first" and not args.fit_initial and after is None and fitted
-            and os.path.basename(run.source) == os.path.basename(str(fitted.get("run")))):
+    first_run = after if after is not None else run  # the run the simulation starts on
+    same = bool(fitted) and os.path.basename(first_run.source) == os.path.basename(str(fitted.get("run")))
+    if args.start == "first" and not args.fit_initial and same:
         _say(args, f"note: {args.machine}'s values were fitted on a run named {fitted['run']} from a start of "
                    "their own; this simulation starts from the first readings as they are (--start fitted "
                    "starts from the fitted start, as the file's figures do)")
+    if args.start == "fitted" and fitted and not same:
+        _say(args, f"note: the fitted start belongs to the run {fitted['run']}, not to {first_run.source}: "
+                   "each node starts from this run's first reading plus that run's offset")
     sim = machine.simulate(run, fit_initial=args.fit_initial, after=after,
                            initial_k="fitted" if args.start == "fitted" else None)
     stamps = _iso_stamps(args.run, args.delimiter, run)
