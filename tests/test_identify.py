@@ -60,6 +60,8 @@ from thermerr_rs.cli import main
 from thermerr_rs.errors import DataError, SuspectReadingWarning, ThermerrError
 from thermerr_rs.thermal import Machine, diagnose
 
+from conftest import EXAMPLES
+
 HOURS, DT_S = (8.0, 4.0), 120.0
 CAUSES = ("ambient_coupling", "unmodeled_source", "thermal_lag", "sensor_drift", "none")
 # the brief's bar: the identified machine names the hidden cause within one case of the nominal
@@ -424,6 +426,21 @@ def test_the_file_states_the_start_its_figures_are_from(tmp_path, capsys):
     back = Machine.load(cal_out)
     assert js["rmse_um"] == pytest.approx(rms(back.simulate(read, initial_k="fitted").drift["E_z"] - read["E_z"]))
     assert js["first_reading_rmse_um"] == pytest.approx(rms(back.simulate(read).drift["E_z"] - read["E_z"]))
+
+
+def test_calibrate_scores_the_rows_its_probe_reads():
+    """calibrate's RMS figures leave out the rows where the run shows the probe failing (a jump
+    away and back), as every fit and score of the core does: here 50 µm added to 100 rows."""
+    run = tr.read_run(EXAMPLES / "vmc_run.csv")
+    cols = {n: run[n].copy() for n in run.names}
+    cols["E_z"][300:400] += 50.0
+    bad = tr.Run.from_frame({"time_s": run.time_s, **cols})
+    cal, info = Machine.load(EXAMPLES / "vmc_nominal.toml").calibrate(bad)
+    r = cal.simulate(bad, initial_k="fitted").drift["E_z"] - bad["E_z"]
+    keep = np.ones(len(r), bool)
+    keep[300:400] = False
+    assert info["rmse_um"] == pytest.approx(float(np.sqrt(np.mean(r[keep] ** 2))), rel=1e-12)
+    assert float(np.sqrt(np.mean(r**2))) > 50 * info["rmse_um"]
 
 
 def test_a_drift_map_whose_node_terms_cancel_is_noted():

@@ -166,7 +166,11 @@ class Machine:
     def calibrate(self, run: Run, axis: str | None = None, *, bound_factor: float = 3.0,
                   max_iter: int = 60) -> tuple[Machine, dict[str, Any]]:
         """Fit capacities, conductances, sources and drift coefficients to ``run``; returns the
-        calibrated machine and a dict of fit figures."""
+        calibrated machine (its fitted start in its ``[start]`` table) and a dict of fit figures:
+        ``sigma_t``, ``sigma_e``, ``ssr``, ``n_data``, ``n_params``, ``bic``, ``n_iter``,
+        ``converged``, ``init_offsets``, ``axis``, and the axis's RMS (µm, over the rows its
+        probe reads) from the fitted start, ``rmse_um``, and from the first readings as they
+        are, ``first_reading_rmse_um``."""
         ax = axis or self.axes[0]
         inner, info = self._inner.calibrate(*_run_args(run), axis=ax, bound_factor=bound_factor, max_iter=max_iter)
         return Machine(inner), info

@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use thermerr_core::progress::Progress;
 use thermerr_core::run::Run;
-use thermerr_core::thermal::calibrate::{calibrate, CalibrationOptions};
+use thermerr_core::thermal::calibrate::{calibrate, CalibrationOptions, Reading};
 use thermerr_core::thermal::diagnose::{
     diagnose, diagnose_axes, Cause, DiagnoseOptions, Diagnosis, Verdict,
 };
@@ -244,11 +244,22 @@ impl PyMachine {
             max_iter,
             ..CalibrationOptions::default()
         };
-        let cal = crate::detach(py, || {
+        let axis = opts.axis.clone();
+        let (cal, figures) = crate::detach(py, || {
             let view = RunView::new(&run);
             self.inner
                 .check_columns(&self.file, &run.source, |c| view.has(c))?;
-            calibrate(&self.inner, &view, &opts, None)
+            let cal = calibrate(&self.inner, &view, &opts, None)?;
+            // the axis's RMS over the rows its probe reads, from the fitted start and from the
+            // first readings as they are (where a simulation of a run starts)
+            let e = Reading::of(&view, &axis)?;
+            let mut figures = Vec::new();
+            for init in [Init::Offsets(cal.init.clone()), Init::FirstReading] {
+                let sim = simulate(&cal.machine, &view, &init)?;
+                let pred = sim.drift.iter().find(|(a, _)| *a == axis).map(|(_, p)| p);
+                figures.push(pred.map_or(f64::NAN, |p| e.rmse(p, 0..view.len())));
+            }
+            Ok((cal, figures))
         })?;
         let d = PyDict::new(py);
         d.set_item("sigma_t", cal.sigma_t)?;
@@ -260,6 +271,9 @@ impl PyMachine {
         d.set_item("n_iter", cal.n_iter)?;
         d.set_item("converged", cal.converged)?;
         d.set_item("init_offsets", cal.init.clone())?;
+        d.set_item("axis", &axis)?;
+        d.set_item("rmse_um", figures[0])?;
+        d.set_item("first_reading_rmse_um", figures[1])?;
         Ok((
             PyMachine {
                 inner: cal.machine,

@@ -1600,9 +1600,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     for ((ax, pred), (_, first)) in sim.drift.iter().zip(&plain.drift) {
         // a failing probe's rows are not scored
         let e = Reading::of(&view, ax)?;
-        let err = |p: &[f64], rows: std::ops::Range<usize>| {
-            rms(rows.filter(|&i| e.reads(i)).map(|i| p[i] - e.values[i]))
-        };
+        let err = |p: &[f64], rows: std::ops::Range<usize>| e.rmse(p, rows);
         axes.push(AxisFit {
             axis: ax.clone(),
             train_rmse_um: err(pred, 0..m),
