@@ -39,6 +39,20 @@ pub fn rms(v: &[f64]) -> f64 {
     (v.iter().map(|x| x * x).sum::<f64>() / v.len().max(1) as f64).sqrt()
 }
 
+/// RMS of a stream of values, summed in order; NaN for none (nothing to score).
+pub fn rms_of(v: impl Iterator<Item = f64>) -> f64 {
+    let (mut s, mut n) = (0.0, 0usize);
+    for x in v {
+        s += x * x;
+        n += 1;
+    }
+    if n == 0 {
+        f64::NAN
+    } else {
+        (s / n as f64).sqrt()
+    }
+}
+
 /// Scores `predicted` against `measured`. `zero_tol` is the |e| at or below which a sample is left
 /// out of the mean accuracy; `None` takes 5 % of max |e|.
 pub fn scores(measured: &[f64], predicted: &[f64], zero_tol: Option<f64>) -> Result<Scores> {

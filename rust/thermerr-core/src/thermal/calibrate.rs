@@ -383,17 +383,10 @@ impl<'a> Reading<'a> {
     /// RMS of `predicted − values` over the rows among `rows` that are scored (a failing
     /// probe's rows left out); NaN when none is.
     pub fn rmse(&self, predicted: &[f64], rows: std::ops::Range<usize>) -> f64 {
-        let (mut ss, mut n) = (0.0, 0usize);
-        for k in rows.filter(|&k| self.reads(k)) {
-            let d = predicted[k] - self.values[k];
-            ss += d * d;
-            n += 1;
-        }
-        if n == 0 {
-            f64::NAN
-        } else {
-            (ss / n as f64).sqrt()
-        }
+        crate::metrics::rms_of(
+            rows.filter(|&k| self.reads(k))
+                .map(|k| predicted[k] - self.values[k]),
+        )
     }
 
     /// The values of `v` (a series of the run's rows) on the fitted rows among `rows`.

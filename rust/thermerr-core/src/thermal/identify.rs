@@ -69,7 +69,7 @@ use super::sim::{lag, simulate, Init, RunView};
 use crate::error::{Error, Result};
 use crate::fcm::FcmParams;
 use crate::linalg::lstsq_columns;
-use crate::metrics::pearson;
+use crate::metrics::{pearson, rms_of as rms};
 use crate::portable;
 use crate::run::Run;
 use crate::samples::Samples;
@@ -618,19 +618,6 @@ fn fmt_s(tau: f64) -> String {
         format!("{tau:.0} s ({:.1} h)", tau / 3600.0)
     } else {
         format!("{tau:.0} s ({:.0} min)", tau / 60.0)
-    }
-}
-
-fn rms(v: impl Iterator<Item = f64>) -> f64 {
-    let (mut s, mut n) = (0.0, 0usize);
-    for x in v {
-        s += x * x;
-        n += 1;
-    }
-    if n == 0 {
-        f64::NAN
-    } else {
-        (s / n as f64).sqrt()
     }
 }
 
