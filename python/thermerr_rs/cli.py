@@ -466,7 +466,8 @@ def cmd_predict(args: argparse.Namespace) -> int:
     fitted = machine.to_dict().get("start") or {}
     first_run = after if after is not None else run  # the run the simulation starts on
     same = bool(fitted) and os.path.basename(first_run.source) == os.path.basename(str(fitted.get("run")))
-    if args.start == "first" and not args.fit_initial and same:
+    offset = any(v != 0.0 for v in (fitted.get("initial_k") or {}).values())
+    if args.start == "first" and not args.fit_initial and same and offset:
         _say(args, f"note: {args.machine}'s values were fitted on a run named {fitted['run']} from a start of "
                    "their own; this simulation starts from the first readings as they are (--start fitted "
                    "starts from the fitted start, as the file's figures do)")
@@ -515,10 +516,12 @@ def cmd_init(args: argparse.Namespace) -> int:
         _say(args, "second sensors on a part (lagged copies of a node's sensor, not nodes): " + ", ".join(
             f"{c['column']} ~ {c['of']} (lag {c['tau_s']:.0f} s)" for c in s["copies"]))
     for a in s["axes"]:
+        v = a["holdout_rmse_um"]  # None: the probe reads none of the held-out rows
+        held = (f"{v:.3f} µm" if isinstance(v, float) and math.isfinite(v)
+                else "none (its probe reads none of the held-out rows)")
         _say(args, f"{a['axis']}: training RMS {a['train_rmse_um']:.3f} µm, "
-                   f"held-out RMS {a['holdout_rmse_um']:.3f} µm (last {s['holdout_rows']} rows; "
-                   f"probe noise {a['noise_um']:.2f} µm; from the first readings as they are: "
-                   f"{a['first_reading_train_rmse_um']:.3f} and {a['first_reading_holdout_rmse_um']:.3f} µm)")
+                   f"held-out RMS {held} (last {s['holdout_rows']} rows; "
+                   f"probe noise {a['noise_um']:.2f} µm; simulated from the first readings, as any run is)")
     for note in s["notes"]:
         _say(args, f"note: {note}")
     _say(args, f"wrote {args.out}")

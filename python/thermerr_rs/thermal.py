@@ -96,10 +96,10 @@ class Machine:
 
     @property
     def fitted_start(self) -> dict[str, float]:
-        """The start the machine's values were fitted from (``thermerr init``, ``calibrate``, a
-        diagnosis's TOMLs): K added to each node's first reading, on the run named in the file's
-        ``[start]`` table (``to_dict()["start"]["run"]``). Its figures are from that start;
-        another run starts from its own readings. Raises :class:`DataError` for a machine
+        """The start the machine's figures are from (``thermerr init``: zero, the first readings,
+        as any run starts; ``calibrate`` and a diagnosis's TOMLs: the start their fit ended at):
+        K added to each node's first reading, on the run named in the file's ``[start]`` table
+        (``to_dict()["start"]["run"]``). Another run starts from its own readings. Raises :class:`DataError` for a machine
         without one (written by hand, or by an older version)."""
         start = (self.to_dict().get("start") or {}).get("initial_k")
         if start is None:

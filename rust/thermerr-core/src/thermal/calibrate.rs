@@ -275,6 +275,41 @@ fn fit_drift(
     sigma_e: f64,
 ) -> Result<(Vec<f64>, Vec<f64>)> {
     let measured = error.values;
+    let (basis, prior) = drift_basis(m, d, run, temps)?;
+    if basis.is_empty() {
+        return Ok((Vec::new(), vec![0.0; measured.len()]));
+    }
+    let coef = if error.failing.is_empty() {
+        let cols: Vec<&[f64]> = basis.iter().map(Vec::as_slice).collect();
+        lstsq_with_prior(&cols, measured, rows, sigma_e, &prior)?
+    } else {
+        // a failing probe: the fitted rows only
+        let kept: Vec<Vec<f64>> = basis.iter().map(|b| error.kept(b, 0..rows)).collect();
+        let cols: Vec<&[f64]> = kept.iter().map(Vec::as_slice).collect();
+        let y = error.kept(measured, 0..rows);
+        lstsq_with_prior(&cols, &y, y.len(), sigma_e, &prior)?
+    };
+    let fitted = combine(&coef, &basis, measured.len());
+    Ok((coef, fitted))
+}
+
+/// Σ coefₖ·basisₖ over `len` rows.
+fn combine(coef: &[f64], basis: &[Vec<f64>], len: usize) -> Vec<f64> {
+    let mut fitted = vec![0.0; len];
+    for (c, s) in coef.iter().zip(basis) {
+        for (f, v) in fitted.iter_mut().zip(s) {
+            *f += c * v;
+        }
+    }
+    fitted
+}
+
+/// The linear drift terms' series and their priors (centre, width).
+type DriftBasis = (Vec<Vec<f64>>, Vec<(f64, f64)>);
+
+/// The series of the linear drift terms of axis `d` on node temperatures `temps` (lagged terms
+/// first, through the axis' lag, then instant ones) and each one's weak prior ([`prior_of`]).
+fn drift_basis(m: &Machine, d: usize, run: &RunView<'_>, temps: &[f64]) -> Result<DriftBasis> {
     let spec = &m.drift[d];
     let terms = drift_terms(m, spec, run, temps)?;
     let mut basis: Vec<Vec<f64>> = Vec::new();
@@ -290,27 +325,83 @@ fn fit_drift(
         basis.push(s);
         prior.push(prior_of(label, c));
     }
-    let nb = basis.len();
-    if nb == 0 {
-        return Ok((Vec::new(), vec![0.0; measured.len()]));
+    Ok((basis, prior))
+}
+
+/// Ridge penalties a drift map for a new run chooses from ([`ridge_drift`]): λ relative to the
+/// mean diagonal of the terms' Gram matrix, 10⁻⁶ (least squares, all but) to 1 by half decades.
+pub const RIDGE_GRID: [f64; 13] = [
+    1e-6, 3.16e-6, 1e-5, 3.16e-5, 1e-4, 3.16e-4, 1e-3, 3.16e-3, 1e-2, 3.16e-2, 1e-1, 3.16e-1, 1.0,
+];
+/// Blocked folds (contiguous, in time order) that choose the penalty.
+pub const RIDGE_FOLDS: usize = 5;
+
+/// Minimises ‖Σⱼ cⱼ·colsⱼ − y‖² + λ·s·‖c‖², s the mean of the columns' squared norms.
+fn ridge(cols: &[&[f64]], y: &[f64], lambda: f64) -> Result<Vec<f64>> {
+    let s = cols.iter().map(|c| crate::linalg::dot(c, c)).sum::<f64>() / cols.len() as f64;
+    let width = 1.0 / (lambda * s.max(f64::MIN_POSITIVE)).sqrt();
+    lstsq_with_prior(cols, y, y.len(), 1.0, &vec![(0.0, width); cols.len()])
+}
+
+/// The drift map of axis `d` that a run simulated from its first readings calls for: its linear
+/// terms on node temperatures `temps`, fitted to `error` over its fitted rows among the first
+/// `rows` by ridge regression, the penalty the one of [`RIDGE_GRID`] that predicts best across
+/// [`RIDGE_FOLDS`] blocked folds of those rows (each block predicted from the others). Node rises
+/// that move together let least squares trade large coefficients of opposite signs; those carry
+/// any difference between the simulated and the real temperatures (a start, another run's duty)
+/// into the axis many times over. Returns the coefficients (in [`fit_drift`]'s order) and λ.
+pub fn ridge_drift(
+    m: &Machine,
+    d: usize,
+    run: &RunView<'_>,
+    temps: &[f64],
+    error: &Reading<'_>,
+    rows: usize,
+) -> Result<(Vec<f64>, f64)> {
+    let (basis, _) = drift_basis(m, d, run, temps)?;
+    if basis.is_empty() {
+        return Ok((Vec::new(), 0.0));
     }
-    let coef = if error.failing.is_empty() {
-        let cols: Vec<&[f64]> = basis.iter().map(Vec::as_slice).collect();
-        lstsq_with_prior(&cols, measured, rows, sigma_e, &prior)?
-    } else {
-        // a failing probe: the fitted rows only
-        let kept: Vec<Vec<f64>> = basis.iter().map(|b| error.kept(b, 0..rows)).collect();
-        let cols: Vec<&[f64]> = kept.iter().map(Vec::as_slice).collect();
-        let y = error.kept(measured, 0..rows);
-        lstsq_with_prior(&cols, &y, y.len(), sigma_e, &prior)?
-    };
-    let mut fitted = vec![0.0; measured.len()];
-    for (c, s) in coef.iter().zip(&basis) {
-        for (f, v) in fitted.iter_mut().zip(s) {
-            *f += c * v;
+    let x: Vec<Vec<f64>> = basis.iter().map(|b| error.kept(b, 0..rows)).collect();
+    ridge_by_folds(&x, &error.kept(error.values, 0..rows))
+}
+
+/// Ridge regression of `y` on the columns `x`, the penalty the one of [`RIDGE_GRID`] whose fits
+/// predict best across [`RIDGE_FOLDS`] contiguous blocks of the rows (each block from the
+/// others; the smallest on a tie); too few rows for the folds: the smallest. Returns the
+/// coefficients on every row and the penalty.
+pub fn ridge_by_folds(x: &[Vec<f64>], y: &[f64]) -> Result<(Vec<f64>, f64)> {
+    let n = y.len();
+    let cols: Vec<&[f64]> = x.iter().map(Vec::as_slice).collect();
+    let mut best = (f64::INFINITY, RIDGE_GRID[0]);
+    if n >= RIDGE_FOLDS * (2 * cols.len() + 10) {
+        let edge = |k: usize| k * n / RIDGE_FOLDS;
+        for &lambda in &RIDGE_GRID {
+            crate::interrupt::check()?;
+            let mut sse = 0.0;
+            for f in 0..RIDGE_FOLDS {
+                let held = edge(f)..edge(f + 1);
+                let rest = |v: &[f64]| -> Vec<f64> {
+                    v[..held.start]
+                        .iter()
+                        .chain(&v[held.end..])
+                        .copied()
+                        .collect()
+                };
+                let xs: Vec<Vec<f64>> = x.iter().map(|c| rest(c)).collect();
+                let xr: Vec<&[f64]> = xs.iter().map(Vec::as_slice).collect();
+                let c = ridge(&xr, &rest(y), lambda)?;
+                sse += held
+                    .clone()
+                    .map(|k| (y[k] - c.iter().zip(x).map(|(c, b)| c * b[k]).sum::<f64>()).powi(2))
+                    .sum::<f64>();
+            }
+            if sse < best.0 {
+                best = (sse, lambda);
+            }
         }
     }
-    Ok((coef, fitted))
+    Ok((ridge(&cols, y, best.1)?, best.1))
 }
 
 /// Weak prior (centre, width) of a linear drift coefficient: nominal node coefficients are kept
@@ -328,7 +419,7 @@ fn prior_of(label: &str, nominal: f64) -> (f64, f64) {
 }
 
 /// Stores fitted drift coefficients back into the machine.
-fn store_drift(m: &mut Machine, d: usize, coef: &[f64]) {
+pub fn store_drift(m: &mut Machine, d: usize, coef: &[f64]) {
     let spec = &mut m.drift[d];
     let mut it = coef.iter().copied();
     for v in spec.um_per_k.values_mut() {
@@ -835,6 +926,76 @@ pub fn fit_initial_offsets(m: &Machine, run: &RunView<'_>, window: usize) -> Res
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two columns that move together (the second the first plus a little noise) and a third of
+    /// its own; `y` is the first column plus the third, plus noise.
+    fn collinear(n: usize) -> (Vec<Vec<f64>>, Vec<f64>) {
+        let wiggle = |k: usize, a: f64| (k as f64 * a).sin();
+        let a: Vec<f64> = (0..n)
+            .map(|k| 10.0 * (1.0 - (-(k as f64) / 300.0).exp()))
+            .collect();
+        let b: Vec<f64> = a
+            .iter()
+            .enumerate()
+            .map(|(k, v)| v + 0.1 * wiggle(k, 1.7))
+            .collect();
+        let c: Vec<f64> = (0..n).map(|k| wiggle(k, 0.013)).collect();
+        let spurious = |k: usize| 10.0 * wiggle(k, 1.7) * (-(k as f64) / 40.0).exp();
+        let y = (0..n).map(|k| a[k] + c[k] + spurious(k)).collect();
+        (vec![a, b, c], y)
+    }
+
+    #[test]
+    fn the_folds_choose_a_penalty_that_stops_collinear_terms_cancelling() {
+        let (x, y) = collinear(1000);
+        let cols: Vec<&[f64]> = x.iter().map(Vec::as_slice).collect();
+        let ols = ridge(&cols, &y, RIDGE_GRID[0]).unwrap();
+        let (coef, lambda) = ridge_by_folds(&x, &y).unwrap();
+        // least squares trades the two together columns against each other
+        assert!(ols[0] < -2.0 && ols[1] > 3.0, "{ols:?}");
+        // the folds pick a penalty, and the pair shares the effect (about 1 in all)
+        assert!(lambda > RIDGE_GRID[0], "{lambda}");
+        assert!(coef[0].abs() < 2.0 && coef[1].abs() < 2.0, "{coef:?}");
+        assert!((coef[0] + coef[1] - 1.0).abs() < 0.05, "{coef:?}");
+        // the term of its own keeps most of its effect (a ridge shrinks every coefficient)
+        assert!(coef[2] > 0.85 && coef[2] < 1.0, "{coef:?}");
+        // and the rows past the spurious effect are predicted better than least squares does
+        let rmse_late = |c: &[f64]| {
+            let r = (200..1000).map(|k| y[k] - (0..3).map(|j| c[j] * x[j][k]).sum::<f64>());
+            crate::metrics::rms_of(r)
+        };
+        assert!(
+            rmse_late(&coef) < 0.5 * rmse_late(&ols),
+            "{} {}",
+            rmse_late(&coef),
+            rmse_late(&ols)
+        );
+        // the same numbers every time
+        assert_eq!(ridge_by_folds(&x, &y).unwrap(), (coef, lambda));
+    }
+
+    #[test]
+    fn independent_terms_keep_about_least_squares() {
+        let n = 1000;
+        let x: Vec<Vec<f64>> = (0..3)
+            .map(|j| {
+                (0..n)
+                    .map(|k| ((k * (j + 1)) as f64 * 0.011).sin() + j as f64 * 0.1)
+                    .collect()
+            })
+            .collect();
+        let y: Vec<f64> = (0..n)
+            .map(|k| 2.0 * x[0][k] - 1.0 * x[1][k] + 0.5 * x[2][k] + 0.01 * (k as f64 * 2.3).sin())
+            .collect();
+        let (coef, lambda) = ridge_by_folds(&x, &y).unwrap();
+        assert!(lambda <= 1e-4, "{lambda}");
+        for (c, want) in coef.iter().zip([2.0, -1.0, 0.5]) {
+            assert!((c - want).abs() < 0.01, "{coef:?}");
+        }
+        // too few rows for five folds: the smallest penalty, no folds
+        let short: Vec<Vec<f64>> = x.iter().map(|c| c[..40].to_vec()).collect();
+        assert_eq!(ridge_by_folds(&short, &y[..40]).unwrap().1, RIDGE_GRID[0]);
+    }
 
     #[test]
     fn failing_rows_join_into_disjoint_ranges() {
