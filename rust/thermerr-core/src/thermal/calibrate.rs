@@ -16,7 +16,7 @@ use super::sim::{
     Simulation, Steps, Thinned,
 };
 use crate::error::{Error, Result};
-use crate::linalg::{lstsq_columns, lstsq_with_prior};
+use crate::linalg::{dot, gram, lstsq_columns, lstsq_with_prior, Cholesky};
 use crate::optim::{least_squares, LmOptions};
 use crate::portable;
 
@@ -338,7 +338,7 @@ pub const RIDGE_FOLDS: usize = 5;
 
 /// Minimises ‖Σⱼ cⱼ·colsⱼ − y‖² + λ·s·‖c‖², s the mean of the columns' squared norms.
 fn ridge(cols: &[&[f64]], y: &[f64], lambda: f64) -> Result<Vec<f64>> {
-    let s = cols.iter().map(|c| crate::linalg::dot(c, c)).sum::<f64>() / cols.len() as f64;
+    let s = cols.iter().map(|c| dot(c, c)).sum::<f64>() / cols.len() as f64;
     let width = 1.0 / (lambda * s.max(f64::MIN_POSITIVE)).sqrt();
     lstsq_with_prior(cols, y, y.len(), 1.0, &vec![(0.0, width); cols.len()])
 }
@@ -371,29 +371,42 @@ pub fn ridge_drift(
 /// others; the smallest on a tie); too few rows for the folds: the smallest. Returns the
 /// coefficients on every row and the penalty.
 pub fn ridge_by_folds(x: &[Vec<f64>], y: &[f64]) -> Result<(Vec<f64>, f64)> {
-    let n = y.len();
+    let (n, p) = (y.len(), x.len());
     let cols: Vec<&[f64]> = x.iter().map(Vec::as_slice).collect();
     let mut best = (f64::INFINITY, RIDGE_GRID[0]);
-    if n >= RIDGE_FOLDS * (2 * cols.len() + 10) {
+    if n >= RIDGE_FOLDS * (2 * p + 10) {
         let edge = |k: usize| k * n / RIDGE_FOLDS;
+        // each block's Gram matrix and Xᵀy, once: a fold's are the sums over the other blocks
+        let blocks = (0..RIDGE_FOLDS)
+            .map(|f| {
+                let r = edge(f)..edge(f + 1);
+                let bc: Vec<&[f64]> = cols.iter().map(|c| &c[r.clone()]).collect();
+                let xty: Vec<f64> = bc.iter().map(|c| dot(c, &y[r.clone()])).collect();
+                Ok((gram(&bc, r.len())?, xty))
+            })
+            .collect::<Result<Vec<_>>>()?;
         for &lambda in &RIDGE_GRID {
             crate::interrupt::check()?;
             let mut sse = 0.0;
             for f in 0..RIDGE_FOLDS {
-                let held = edge(f)..edge(f + 1);
-                let rest = |v: &[f64]| -> Vec<f64> {
-                    v[..held.start]
-                        .iter()
-                        .chain(&v[held.end..])
-                        .copied()
-                        .collect()
+                let (mut g, mut rhs) = (vec![0.0; p * p], vec![0.0; p]);
+                for (_, (gb, bb)) in blocks.iter().enumerate().filter(|(b, _)| *b != f) {
+                    g.iter_mut().zip(gb).for_each(|(a, v)| *a += v);
+                    rhs.iter_mut().zip(bb).for_each(|(a, v)| *a += v);
+                }
+                let s = (0..p).map(|j| g[j * p + j]).sum::<f64>() / p as f64;
+                for j in 0..p {
+                    g[j * p + j] += lambda * s;
+                }
+                let Some(chol) = Cholesky::new(&g, p) else {
+                    sse = f64::INFINITY; // not positive definite at this penalty: not chosen
+                    break;
                 };
-                let xs: Vec<Vec<f64>> = x.iter().map(|c| rest(c)).collect();
-                let xr: Vec<&[f64]> = xs.iter().map(Vec::as_slice).collect();
-                let c = ridge(&xr, &rest(y), lambda)?;
-                sse += held
-                    .clone()
-                    .map(|k| (y[k] - c.iter().zip(x).map(|(c, b)| c * b[k]).sum::<f64>()).powi(2))
+                let c = chol.solve(&rhs);
+                sse += (edge(f)..edge(f + 1))
+                    .map(|k| {
+                        (y[k] - c.iter().zip(&cols).map(|(c, b)| c * b[k]).sum::<f64>()).powi(2)
+                    })
                     .sum::<f64>();
             }
             if sse < best.0 {
