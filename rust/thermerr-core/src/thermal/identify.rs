@@ -1184,8 +1184,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         gains: Vec<f64>,
         r2: f64,
     }
-    let mut fos = Vec::new();
-    for &r in &reps {
+    let first_order = |r: usize| -> Result<Fo> {
         let y = &rises[r];
         let ss: f64 = y.iter().map(|v| v * v).sum::<f64>().max(1e-12);
         let mut best: Option<Fo> = None;
@@ -1200,8 +1199,12 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
                 });
             }
         }
-        fos.push(best.expect("the τ grid is not empty"));
-    }
+        Ok(best.expect("the τ grid is not empty"))
+    };
+    let fos = reps
+        .iter()
+        .map(|&r| first_order(r))
+        .collect::<Result<Vec<Fo>>>()?;
 
     // 4. sources
     let names: Vec<String> = reps
@@ -1212,8 +1215,28 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let mut source_notes = Vec::new();
     let mut heated_by = vec![Vec::new(); nn];
     for (ui, (u, top, _)) in powers.iter().enumerate() {
-        let slope: Vec<f64> = fos.iter().map(|f| f.gains[ui] / f.tau).collect();
-        let smax = slope.iter().fold(0.0_f64, |a, v| a.max(*v));
+        let mut slope: Vec<f64> = fos.iter().map(|f| f.gains[ui] / f.tau).collect();
+        let mut smax = slope.iter().fold(0.0_f64, |a, v| a.max(*v));
+        if smax <= 0.0 && groups.iter().any(|g| g.len() > 1) {
+            // no node's own sensor warms with it (with few nodes, a node's sensor is its
+            // cluster's most typical, often a slow one): each node by the member of its cluster
+            // that warms fastest with it
+            let mut by_member = vec![0.0_f64; nn];
+            for (i, g) in groups.iter().enumerate() {
+                for &s in g {
+                    let f = first_order(s)?;
+                    by_member[i] = by_member[i].max(f.gains[ui] / f.tau);
+                }
+            }
+            let mmax = by_member.iter().fold(0.0_f64, |a, v| a.max(*v));
+            if mmax > 0.0 {
+                notes.push(format!(
+                    "no node's own sensor warms with {u}: its heat is placed by the sensors of \
+                     each node's cluster that warm fastest with it"
+                ));
+                (slope, smax) = (by_member, mmax);
+            }
+        }
         if smax <= 0.0 {
             notes.push(format!("no node warms with {u}: it drives no source"));
             continue;
