@@ -28,7 +28,9 @@
 //!    lag(p_u², τ): a source exponent between 1 and 2.)
 //! 4. **Sources.** An input heats the nodes whose initial slope k_u/τ is at least half the
 //!    largest one for that input (the nodes that respond first and strongest), its 100 W at
-//!    the input's maximum shared in proportion to those slopes. Before the clustering, a
+//!    the input's maximum shared in proportion to those slopes; where no node's own sensor warms
+//!    with the input, each node's slope is its cluster's fastest-warming member's. Before the
+//!    clustering, a
 //!    temperature that a two-time-constant response to the inputs and the ambient leaves with a
 //!    residual above [`SCREEN_RATIO`] times its noise is left out of the network (a spare column:
 //!    an electrical cabinet or a chiller that does not follow the machine's heat). Noise here
@@ -58,6 +60,11 @@
 //!    factor 10 and a prior of a factor 10 as one σ, since a start is a guess) and the better
 //!    training fit is kept: each ends 2-300x worse than the other on some synthetic run. Every
 //!    further axis keeps the network and refits only its drift map.
+//! 7. **Drift maps for a new run.** A run is simulated from its sensors' first readings, so
+//!    every axis's map is fitted last to the temperatures the rounded network simulates from
+//!    there, by ridge regression with its penalty chosen on blocked folds of the training rows
+//!    ([`ridge_drift`]); the file's figures and `[start]` (zero offsets) are from the first
+//!    readings. A note names an axis held out worse than no compensation at all.
 
 use serde::Serialize;
 
