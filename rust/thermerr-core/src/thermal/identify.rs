@@ -1686,14 +1686,15 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     }
     // the `none` bar of a diagnosis: held-out error within it is noise
     let ratio = super::diagnose::DiagnoseOptions::default().noise_ratio;
-    // an axis held out worse than no compensation at all: its drift map does not carry beyond
-    // the training rows
+    // an axis held out worse than no compensation at all, beyond the noise: its drift map does
+    // not carry beyond the training rows
     let worse: Vec<String> = axes
         .iter()
         .filter_map(|a| {
             let e = Reading::of(&view, &a.axis).ok()?;
             let none = e.rmse(&vec![0.0; n], m..n);
-            (n > m && a.holdout_rmse_um > none).then(|| {
+            // within the `none` bar both are noise: nothing to say
+            (n > m && a.holdout_rmse_um > none.max(ratio * a.noise_um)).then(|| {
                 format!(
                     "{} ({:.1} µm against {none:.1} µm)",
                     a.axis, a.holdout_rmse_um
