@@ -175,8 +175,32 @@ fn clear_interrupt() {
     thermerr_core::interrupt::clear();
 }
 
+/// Looks numpy's C API up now. rust-numpy does it on the first array, running Python code (numpy's
+/// version check) that a Ctrl-C interrupts, and then panics ("Failed to access NumPy array API
+/// capsule"): on a 1-s run, Ctrl-C while `init` read it crossed into Python as a PanicException.
+/// At import a failure is an ImportError naming the cause.
+fn load_numpy_api(py: Python<'_>) -> PyResult<()> {
+    let prev = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {})); // the error below says it
+    let out = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let _ = numpy::PyArray1::<f64>::zeros(py, 0, false);
+    }));
+    std::panic::set_hook(prev);
+    out.map_err(|e| {
+        let why = e
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| e.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_default();
+        pyo3::exceptions::PyImportError::new_err(format!(
+            "numpy's C API could not be loaded: {why}"
+        ))
+    })
+}
+
 #[pymodule(gil_used = false)]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    load_numpy_api(m.py())?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_function(wrap_pyfunction!(request_interrupt, m)?)?;
     m.add_function(wrap_pyfunction!(clear_interrupt, m)?)?;

@@ -250,6 +250,8 @@ fn lowpass(t: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
 
 /// Least squares without intercept; returns the coefficients and the residual sum of squares.
 fn fit(basis: &[Vec<f64>], y: &[f64]) -> Result<(Vec<f64>, f64)> {
+    // the search's building block, thousands of times on a long run: Ctrl-C is seen here
+    crate::interrupt::check()?;
     let cols: Vec<&[f64]> = basis.iter().map(Vec::as_slice).collect();
     let c = lstsq_columns(&cols, y)?;
     let ssr = misfit(basis, &c, y);
@@ -528,15 +530,16 @@ fn lagged_copies(t: &[f64], cols: &[&[f64]], amb: &[f64]) -> Result<Vec<Option<C
         .map(|a| {
             crate::interrupt::check()?;
             let lags: Vec<Vec<f64>> = grid.iter().map(|&tau| lag(t, cols[a], tau)).collect();
-            Ok((0..ns)
+            (0..ns)
                 .map(|b| {
-                    if a == b {
+                    crate::interrupt::check()?;
+                    Ok(if a == b {
                         (f64::INFINITY, 0.0, 0.0)
                     } else {
                         best_copy_fit(t, &grid, &lags, cols[a], cols[b], amb, noise[b])
-                    }
+                    })
                 })
-                .collect())
+                .collect()
         })
         .collect::<Result<_>>()?;
     let is_copy = |b: usize, a: usize| a != b && copy_ok(rows[a][b]);
