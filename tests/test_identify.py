@@ -495,6 +495,7 @@ def test_an_axis_held_out_worse_than_no_compensation_is_noted():
     (note,) = [n for n in s["notes"] if "no compensation" in n]
     (ax,) = s["axes"]
     none = float(np.sqrt(np.mean(cols["E_z"][s["train_rows"]:] ** 2)))
+    assert ax["holdout_uncompensated_um"] == pytest.approx(none, rel=1e-12)  # the same sum, another order
     assert note.startswith(f"held out, the file predicts E_z ({ax['holdout_rmse_um']:.1f} µm against {none:.1f} µm) "
                            "worse than no compensation at all")
     assert "# note: held out, the file predicts E_z" in s["toml"]

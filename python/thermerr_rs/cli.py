@@ -517,8 +517,8 @@ def cmd_init(args: argparse.Namespace) -> int:
             f"{c['column']} ~ {c['of']} (lag {c['tau_s']:.0f} s)" for c in s["copies"]))
     for a in s["axes"]:
         v = a["holdout_rmse_um"]  # None: the probe reads none of the held-out rows
-        held = (f"{v:.3f} µm" if isinstance(v, float) and math.isfinite(v)
-                else "none (its probe reads none of the held-out rows)")
+        held = (f"{v:.3f} µm (no compensation: {a['holdout_uncompensated_um']:.3f} µm)"
+                if isinstance(v, float) and math.isfinite(v) else "none (its probe reads none of the held-out rows)")
         _say(args, f"{a['axis']}: training RMS {a['train_rmse_um']:.3f} µm, "
                    f"held-out RMS {held} (last {s['holdout_rows']} rows; "
                    f"probe noise {a['noise_um']:.2f} µm; simulated from the first readings, as any run is)")

@@ -75,7 +75,8 @@ class Machine:
         ``axes``: the error columns to map (default every ``E_*`` column). Returns the machine
         and a summary: ``ambient`` (``column``, ``rule``, ``reason``), ``nodes`` (each with
         ``sensor``, ``members``, ``tau_fit_s``, ``tau_s``, ``heated_by``), ``axes`` (each with
-        ``train_rmse_um`` and ``holdout_rmse_um``), ``copies`` (second sensors on a part: each
+        ``train_rmse_um``, ``holdout_rmse_um`` and ``holdout_uncompensated_um``, the held-out RMS of
+        the drift itself), ``copies`` (second sensors on a part: each
         ``column``, the node's sensor ``of``, ``tau_s``, ``gain``, ``noise_ratio``), ``spare``,
         ``links``, ``sources``, ``node_rule``, ``suspect_readings`` (readings the run itself
         makes suspect, as in a diagnosis's report; also warned as

@@ -205,6 +205,8 @@ pub struct AxisFit {
     /// Simulated from the sensors' first readings, as a simulation of any run starts.
     pub train_rmse_um: f64,
     pub holdout_rmse_um: f64,
+    /// The held-out RMS of the measured drift itself (from the run's start): no compensation.
+    pub holdout_uncompensated_um: f64,
     /// The probe's noise on the training rows (the diagnosis's estimate), for scale.
     pub noise_um: f64,
 }
@@ -1645,6 +1647,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             axis: ax.clone(),
             train_rmse_um: err(pred, 0..m),
             holdout_rmse_um: err(pred, m..n),
+            holdout_uncompensated_um: err(&vec![0.0; n], m..n),
             noise_um: e.noise(m),
         });
     }
@@ -1694,8 +1697,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let worse: Vec<String> = axes
         .iter()
         .filter_map(|a| {
-            let e = Reading::of(&view, &a.axis).ok()?;
-            let none = e.rmse(&vec![0.0; n], m..n);
+            let none = a.holdout_uncompensated_um;
             // within the `none` bar both are noise: nothing to say
             (n > m && a.holdout_rmse_um > none.max(ratio * a.noise_um)).then(|| {
                 format!(
@@ -1942,7 +1944,10 @@ fn commented_toml(id: &Identification) -> Result<String> {
     line("# calibration, so capacities and conductances are in that convention.");
     for a in &id.axes {
         let held = match a.holdout_rmse_um {
-            v if v.is_finite() => format!("{v:.3} µm"),
+            v if v.is_finite() => format!(
+                "{v:.3} µm (no compensation: {:.3} µm)",
+                a.holdout_uncompensated_um
+            ),
             _ => "none (its probe reads none of the held-out rows)".to_string(),
         };
         line(&format!(
