@@ -940,8 +940,10 @@ pub fn fit_initial_offsets(m: &Machine, run: &RunView<'_>, window: usize) -> Res
 mod tests {
     use super::*;
 
-    /// Two columns that move together (the second the first plus a little noise) and a third of
-    /// its own; `y` is the first column plus the third, plus noise.
+    /// Two columns that move together (the second the first plus a small wiggle) and a third of
+    /// its own; `y` is the first column plus the third, plus a hundred times the wiggle fading
+    /// over the first rows: a difference least squares takes up (as it takes up a start offset
+    /// on a slow node, or another run's duty) and the later rows do not have.
     fn collinear(n: usize) -> (Vec<Vec<f64>>, Vec<f64>) {
         let wiggle = |k: usize, a: f64| (k as f64 * a).sin();
         let a: Vec<f64> = (0..n)
