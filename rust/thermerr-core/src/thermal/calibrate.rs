@@ -17,6 +17,7 @@ use super::sim::{
 };
 use crate::error::{Error, Result};
 use crate::linalg::{dot, gram, lstsq_columns, lstsq_with_prior, Cholesky};
+use crate::metrics::rms_of;
 use crate::optim::{least_squares, LmOptions};
 use crate::portable;
 
@@ -78,6 +79,11 @@ pub struct CalibrationOptions {
     /// misfits by far more than the noise (SSR/n ≫ 1), the fixed absolute tolerance
     /// ([`CALIBRATION_ATOL`]) asks for cost decreases that move the BIC by a millionth.
     pub min_bic_step: f64,
+    /// A ridge penalty λ on the drift map's node coefficients (`um_per_k`), relative to the
+    /// mean square of their terms over the fitted rows, toward the file's values ([`fit_drift`];
+    /// `None`: only the weak prior of [`prior_of`], least squares in effect). The diagnosis
+    /// sets it from [`drift_penalty`].
+    pub drift_ridge: Option<f64>,
 }
 
 impl Default for CalibrationOptions {
@@ -95,6 +101,7 @@ impl Default for CalibrationOptions {
             thermal: true,
             fit_error: true,
             min_bic_step: 0.0,
+            drift_ridge: None,
         }
     }
 }
@@ -132,6 +139,14 @@ impl CalibrationOptions {
         }
         if self.max_iter == 0 {
             return Err(Error::param("max_iter", "must be at least 1"));
+        }
+        if let Some(l) = self.drift_ridge {
+            if !(l.is_finite() && l >= 0.0) {
+                return Err(Error::param(
+                    "drift_ridge",
+                    format!("must be >= 0, got {l}"),
+                ));
+            }
         }
         for (name, v) in [("sigma_t", self.sigma_t), ("sigma_e", self.sigma_e)] {
             if let Some(v) = v {
@@ -263,8 +278,10 @@ pub fn apply(m: &Machine, free: &[FreeParam], x: &[f64]) -> (Machine, Vec<f64>) 
 }
 
 /// The linear drift terms of `axis` fitted to `error` over its fitted rows among the first
-/// `rows`, with weak priors. Returns the coefficients (lagged terms first, then instant ones)
-/// and the fitted series (every row).
+/// `rows`, with weak priors, and with `ridge` a penalty on the node terms ([`ridge_prior`]).
+/// Returns the coefficients (lagged terms first, then instant ones) and the fitted series
+/// (every row).
+#[allow(clippy::too_many_arguments)]
 fn fit_drift(
     m: &Machine,
     d: usize,
@@ -273,24 +290,56 @@ fn fit_drift(
     error: &Reading<'_>,
     rows: usize,
     sigma_e: f64,
+    ridge: Option<f64>,
 ) -> Result<(Vec<f64>, Vec<f64>)> {
     let measured = error.values;
-    let (basis, prior) = drift_basis(m, d, run, temps)?;
+    let (basis, mut prior) = drift_basis(m, d, run, temps)?;
     if basis.is_empty() {
         return Ok((Vec::new(), vec![0.0; measured.len()]));
     }
+    // the node terms come first (`drift_terms`)
+    let nodes = m.drift[d].um_per_k.len();
     let coef = if error.failing.is_empty() {
         let cols: Vec<&[f64]> = basis.iter().map(Vec::as_slice).collect();
+        ridge_prior(&mut prior, &cols[..nodes], rows, sigma_e, ridge);
         lstsq_with_prior(&cols, measured, rows, sigma_e, &prior)?
     } else {
         // a failing probe: the fitted rows only
         let kept: Vec<Vec<f64>> = basis.iter().map(|b| error.kept(b, 0..rows)).collect();
         let cols: Vec<&[f64]> = kept.iter().map(Vec::as_slice).collect();
         let y = error.kept(measured, 0..rows);
+        ridge_prior(&mut prior, &cols[..nodes], y.len(), sigma_e, ridge);
         lstsq_with_prior(&cols, &y, y.len(), sigma_e, &prior)?
     };
     let fitted = combine(&coef, &basis, measured.len());
     Ok((coef, fitted))
+}
+
+/// Narrows the priors of the node terms `nodes` (the first of `prior`) to a ridge penalty
+/// λ·s·‖c − c₀‖², s the mean of their squared norms over `rows`: a prior width of σ/√(λ·s) in
+/// [`lstsq_with_prior`]'s units, never wider than the prior's own.
+fn ridge_prior(
+    prior: &mut [(f64, f64)],
+    nodes: &[&[f64]],
+    rows: usize,
+    sigma: f64,
+    ridge: Option<f64>,
+) {
+    let Some(lambda) = ridge else { return };
+    if nodes.is_empty() {
+        return;
+    }
+    let s = nodes
+        .iter()
+        .map(|c| dot(&c[..rows], &c[..rows]))
+        .sum::<f64>()
+        / nodes.len() as f64;
+    let width = sigma / (lambda * s).sqrt();
+    if width.is_finite() && width > 0.0 {
+        for p in prior.iter_mut().take(nodes.len()) {
+            p.1 = p.1.min(width);
+        }
+    }
 }
 
 /// Σ coefₖ·basisₖ over `len` rows.
@@ -364,6 +413,96 @@ pub fn ridge_drift(
     }
     let x: Vec<Vec<f64>> = basis.iter().map(|b| error.kept(b, 0..rows)).collect();
     ridge_by_folds(&x, &error.kept(error.values, 0..rows))
+}
+
+/// A drift map's node terms cancel when one term alone swings more than this many times the
+/// axis's whole drift (RMS over the training rows).
+pub const CANCELLING_TERMS: f64 = 3.0;
+
+/// The largest node term of axis `d`'s drift map on node temperatures `temps` (row-major, one
+/// row per sample) over the first `rows`, when it swings more than [`CANCELLING_TERMS`] times
+/// the sum of all of them: (node, coefficient, the term's RMS, the drift's RMS). Node rises that
+/// move together let least squares trade large coefficients of opposite signs; a fraction of a
+/// kelvin in one node (its start, another run's duty) then moves the axis by many µm.
+pub fn cancelling_term(
+    m: &Machine,
+    d: usize,
+    temps: &[f64],
+    rows: usize,
+) -> Option<(String, f64, f64, f64)> {
+    let nn = m.nodes.len();
+    let rows = rows.min(temps.len() / nn.max(1));
+    if rows == 0 {
+        return None;
+    }
+    let terms: Vec<(&String, f64, usize)> = m.drift[d]
+        .um_per_k
+        .iter()
+        .filter_map(|(name, &c)| Some((name, c, m.node_index(name)?)))
+        .collect();
+    let rise = |k: usize, r: usize| temps[r * nn + k] - temps[k];
+    let total = rms_of((0..rows).map(|r| terms.iter().map(|&(_, c, k)| c * rise(k, r)).sum()));
+    let (name, c, big) = terms
+        .iter()
+        .map(|&(name, c, k)| (name, c, rms_of((0..rows).map(|r| c * rise(k, r)))))
+        .max_by(|a, b| a.2.total_cmp(&b.2))?;
+    (big > CANCELLING_TERMS * total.max(1e-12)).then(|| (name.clone(), c, big, total))
+}
+
+/// The ridge penalty of [`CalibrationOptions::drift_ridge`] for axis `d` of `m`: the one of
+/// [`RIDGE_GRID`] with which the node terms (on temperatures `temps`, shrunk toward the file's
+/// coefficients) fitted to the first `1 − held_share` of the fitted rows among the first `rows`
+/// best predict the rest, forward in time as a held-out tail or a new run is predicted. Other
+/// drift terms are left out of the choice. Blocked folds that predict a middle block from both
+/// sides ([`ridge_by_folds`]) keep least squares here: a map whose node terms cancel (±48 µm/K
+/// on a 23-h real run, where the file had ±3) fits every block of the run it was fitted to,
+/// and goes astray only beyond it (held out 40 µm, where the file gave 2.5).
+pub fn drift_penalty(
+    m: &Machine,
+    d: usize,
+    run: &RunView<'_>,
+    temps: &[f64],
+    error: &Reading<'_>,
+    rows: usize,
+    held_share: f64,
+) -> Result<f64> {
+    let (basis, _) = drift_basis(m, d, run, temps)?;
+    let nominal: Vec<f64> = m.drift[d].um_per_k.values().copied().collect();
+    let x: Vec<Vec<f64>> = basis[..nominal.len()]
+        .iter()
+        .map(|b| error.kept(b, 0..rows))
+        .collect();
+    let mut y = error.kept(error.values, 0..rows);
+    for (c, col) in nominal.iter().zip(&x) {
+        for (v, b) in y.iter_mut().zip(col) {
+            *v -= c * b;
+        }
+    }
+    forward_penalty(&x, &y, held_share)
+}
+
+/// The one of [`RIDGE_GRID`] with which a ridge regression of `y` on the columns `x`, fitted to
+/// the first `1 − held_share` of the rows, best predicts the rest (the smallest on a tie); too
+/// few rows on either side: the smallest.
+pub fn forward_penalty(x: &[Vec<f64>], y: &[f64], held_share: f64) -> Result<f64> {
+    let n = y.len();
+    let cut = ((n as f64) * (1.0 - held_share)).round() as usize;
+    if x.is_empty() || cut < 2 * x.len() + 10 || n < cut + 10 {
+        return Ok(RIDGE_GRID[0]);
+    }
+    let fit: Vec<&[f64]> = x.iter().map(|c| &c[..cut]).collect();
+    let mut best = (f64::INFINITY, RIDGE_GRID[0]);
+    for &lambda in &RIDGE_GRID {
+        crate::interrupt::check()?;
+        let c = ridge(&fit, &y[..cut], lambda)?;
+        let sse: f64 = (cut..n)
+            .map(|k| (y[k] - c.iter().zip(x).map(|(c, b)| c * b[k]).sum::<f64>()).powi(2))
+            .sum();
+        if sse < best.0 {
+            best = (sse, lambda);
+        }
+    }
+    Ok(best.1)
 }
 
 /// Ridge regression of `y` on the columns `x`, the penalty the one of [`RIDGE_GRID`] whose fits
@@ -608,12 +747,21 @@ pub fn evaluate(
     rows: usize,
     sigma_t: f64,
     sigma_e: f64,
-    refit_drift: bool,
+    refit_drift: Option<Option<f64>>,
 ) -> Result<(Machine, Simulation, Vec<f64>)> {
     let temps = simulate_nodes(m, run, &Init::Offsets(init.to_vec()))?;
     let mut fitted = m.refit_copy();
-    if refit_drift {
-        let (coef, _) = fit_drift(m, tg.axis_index, run, &temps, &tg.error, rows, sigma_e)?;
+    if let Some(ridge) = refit_drift {
+        let (coef, _) = fit_drift(
+            m,
+            tg.axis_index,
+            run,
+            &temps,
+            &tg.error,
+            rows,
+            sigma_e,
+            ridge,
+        )?;
         store_drift(&mut fitted, tg.axis_index, &coef);
     }
     let sim = finish(&fitted, run, temps)?;
@@ -636,10 +784,23 @@ fn residuals(
     sigma_e: f64,
     fit_error: bool,
     steps: &Steps,
+    ridge: Option<f64>,
 ) -> Result<Vec<f64>> {
     let temps = simulate_nodes_on(m, run, &Init::Offsets(init.to_vec()), steps)?;
     let e = match fit_error {
-        true => fit_drift(m, tg.axis_index, run, &temps, &tg.error, rows, sigma_e)?.1,
+        true => {
+            fit_drift(
+                m,
+                tg.axis_index,
+                run,
+                &temps,
+                &tg.error,
+                rows,
+                sigma_e,
+                ridge,
+            )?
+            .1
+        }
         false => Vec::new(),
     };
     Ok(normalised(m, run, tg, &temps, &e, rows, sigma_t, sigma_e))
@@ -792,6 +953,7 @@ fn calibrate_all_rows(
             sigma_e,
             opts.fit_error,
             &steps,
+            opts.drift_ridge,
         )?;
         for (fp, v) in free.iter().zip(x) {
             if let Some((c, w)) = fp.prior {
@@ -823,7 +985,16 @@ fn calibrate_all_rows(
         (res.x, res.n_iter, res.converged)
     };
     let (mm, init) = apply(m, &free, &x);
-    let (mut fitted, _, r) = evaluate(&mm, &init, run, &tg, rows, sigma_t, sigma_e, true)?;
+    let (mut fitted, _, r) = evaluate(
+        &mm,
+        &init,
+        run,
+        &tg,
+        rows,
+        sigma_t,
+        sigma_e,
+        Some(opts.drift_ridge),
+    )?;
     fitted.start = Some(FittedStart {
         run: run.source.to_string(),
         initial_k: named_offsets(&fitted, &init),
@@ -1010,6 +1181,68 @@ mod tests {
         // too few rows for five folds: the smallest penalty, no folds
         let short: Vec<Vec<f64>> = x.iter().map(|c| c[..40].to_vec()).collect();
         assert_eq!(ridge_by_folds(&short, &y[..40]).unwrap().1, RIDGE_GRID[0]);
+    }
+
+    /// Two node rises that move together while the map is fitted and part later, and an error
+    /// that follows their mean plus a small effect of neither, which least squares reads from
+    /// their difference.
+    fn parting(n: usize) -> (Vec<Vec<f64>>, Vec<f64>) {
+        let cut = n * 7 / 10;
+        let t = |k: usize| k as f64 / n as f64;
+        let a: Vec<f64> = (0..n).map(|k| 4.0 * t(k)).collect();
+        let b: Vec<f64> = (0..n)
+            .map(|k| {
+                let wiggle = 0.01 * (k as f64 * 0.37).sin();
+                let part = if k >= cut { 0.8 * (t(k) - 0.7) } else { 0.0 };
+                4.0 * t(k) + wiggle + part
+            })
+            .collect();
+        // the small effect happens to follow b's wiggle while the map is fitted
+        let y = (0..n)
+            .map(|k| {
+                0.5 * (a[k] + b[k])
+                    + if k < cut {
+                        0.03 * (k as f64 * 0.37).sin()
+                    } else {
+                        0.0
+                    }
+            })
+            .collect();
+        (vec![a, b], y)
+    }
+
+    #[test]
+    fn the_forward_penalty_stops_terms_that_part_later_from_cancelling() {
+        let (x, y) = parting(1000);
+        let lambda = forward_penalty(&x, &y, 0.3).unwrap();
+        assert!(lambda > RIDGE_GRID[0], "{lambda}");
+        // on the last 30 %: the chosen penalty against least squares, both fitted before it
+        let late = |lambda: f64| {
+            let fit: Vec<&[f64]> = x.iter().map(|c| &c[..700]).collect();
+            let c = ridge(&fit, &y[..700], lambda).unwrap();
+            crate::metrics::rms_of((700..1000).map(|k| y[k] - c[0] * x[0][k] - c[1] * x[1][k]))
+        };
+        assert!(
+            late(lambda) < 0.5 * late(RIDGE_GRID[0]),
+            "{} {}",
+            late(lambda),
+            late(RIDGE_GRID[0])
+        );
+        // terms that stay apart keep least squares; too few rows: the smallest
+        let n = 1000;
+        let ind: Vec<Vec<f64>> = (0..2)
+            .map(|j| {
+                (0..n)
+                    .map(|k| ((k * (j + 1)) as f64 * 0.011).sin())
+                    .collect()
+            })
+            .collect();
+        let yi: Vec<f64> = (0..n).map(|k| 2.0 * ind[0][k] - ind[1][k]).collect();
+        assert_eq!(forward_penalty(&ind, &yi, 0.3).unwrap(), RIDGE_GRID[0]);
+        assert_eq!(
+            forward_penalty(&x, &y[..20], 0.3).unwrap_or(0.0),
+            RIDGE_GRID[0]
+        );
     }
 
     #[test]

@@ -69,8 +69,8 @@
 use serde::Serialize;
 
 use super::calibrate::{
-    calibrate, evaluate, ridge_drift, store_drift, targets, Calibration, CalibrationOptions,
-    Reading, RIDGE_FOLDS,
+    calibrate, cancelling_term, evaluate, ridge_drift, store_drift, targets, Calibration,
+    CalibrationOptions, Reading, RIDGE_FOLDS,
 };
 use super::machine::{
     bad, Ambient, DriftSpec, FittedStart, Identified, LinkSpec, Machine, NodeSpec, SourceSpec,
@@ -611,10 +611,6 @@ fn lagged_copies(t: &[f64], cols: &[&[f64]], amb: &[f64]) -> Result<Vec<Option<C
 const ALT_TREES: usize = 2;
 
 /// 4 significant digits: the file is for people.
-/// A drift map's node term this many times the axis's whole drift (RMS over the training rows)
-/// is a cancellation worth a note: the terms' sum is a small difference of large numbers.
-const CANCELLING_TERMS: f64 = 3.0;
-
 fn sig4(v: f64) -> f64 {
     if v == 0.0 || !v.is_finite() {
         return v;
@@ -1593,7 +1589,8 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     for ax in ck.axes.iter().skip(1) {
         let tg = targets(&machine, &view, ax)?;
         let sigma_e = tg.error.noise(m).max(1e-3);
-        let (fitted, _, _) = evaluate(&machine, &cal.init, &view, &tg, m, 1.0, sigma_e, true)?;
+        let (fitted, _, _) =
+            evaluate(&machine, &cal.init, &view, &tg, m, 1.0, sigma_e, Some(None))?;
         machine = fitted;
     }
     // round for people, then judge the rounded machine
@@ -1652,33 +1649,15 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         });
     }
     // a drift map whose node terms cancel: each term far larger than the axis's drift
-    let cancelling: Vec<String> = machine
-        .drift
-        .iter()
+    let cancelling: Vec<String> = (0..machine.drift.len())
         .filter_map(|d| {
-            let terms: Vec<(String, f64, Vec<f64>)> = d
-                .um_per_k
-                .iter()
-                .filter_map(|(name, &c)| {
-                    let k = machine.node_index(name)?;
-                    let t = sim.node(k);
-                    let rise = t[..m].iter().map(|v| c * (v - t[0])).collect();
-                    Some((name.clone(), c, rise))
-                })
-                .collect();
-            let total = rms((0..m).map(|i| terms.iter().map(|t| t.2[i]).sum::<f64>()));
-            let (name, c, big) = terms
-                .iter()
-                .map(|(nm, c, r)| (nm, *c, rms(r.iter().copied())))
-                .max_by(|a, b| a.2.total_cmp(&b.2))?;
-            (big > CANCELLING_TERMS * total.max(1e-12)).then(|| {
-                format!(
-                    "{} ({name} at {c} µm/K alone swings {big:.0} µm RMS where the axis's drift \
-                     is {total:.1} µm, {:.0}x)",
-                    d.axis,
-                    big / total.max(1e-12)
-                )
-            })
+            let (name, c, big, total) = cancelling_term(&machine, d, &sim.temps, m)?;
+            Some(format!(
+                "{} ({name} at {c} µm/K alone swings {big:.0} µm RMS where the axis's drift is \
+                 {total:.1} µm, {:.0}x)",
+                machine.drift[d].axis,
+                big / total.max(1e-12)
+            ))
         })
         .collect();
     if !cancelling.is_empty() {

@@ -44,6 +44,23 @@ pub fn network(b: &BaselineNetwork, axis: &str) -> String {
     }
 }
 
+/// Why the drift map was fitted with a ridge penalty (nothing when it was not).
+pub fn drift_penalty(b: &BaselineNetwork, axis: &str) -> String {
+    match &b.drift_penalty {
+        Some(p) => format!(
+            " Fitted by least squares, the baseline's drift map of {axis} cancelled: `{}` at \
+             {:.3} µm/K alone swings {:.1} µm RMS over the training rows where the axis drifts \
+             {:.1} µm, so a fraction of a kelvin in that node moves the axis by many µm. The \
+             baseline and every candidate are therefore fitted with a ridge penalty on the drift \
+             map's node terms, toward the file's values (λ = {:.0e}, relative to their mean \
+             square: the one with which the map fitted to the first part of the training rows \
+             best predicts the rest).",
+            p.node, p.coefficient, p.term_um, p.drift_um, p.lambda
+        ),
+        None => String::new(),
+    }
+}
+
 /// What a second start of the recalibrated baseline says, when it ends elsewhere held out.
 pub fn second_start(b: &BaselineNetwork, first: &Holdout, axis: &str) -> String {
     match &b.second_start {

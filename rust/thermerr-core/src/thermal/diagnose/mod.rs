@@ -44,10 +44,11 @@ pub use rounds::{Accepted, Round, MAX_ROUNDS, MIN_SHARE_OF_EXCESS};
 pub use verdict::Verdict;
 
 use super::calibrate::{
-    calibrate, default_params, evaluate, targets, Calibration, CalibrationOptions, FreeParam,
+    calibrate, cancelling_term, default_params, drift_penalty, evaluate, targets, Calibration,
+    CalibrationOptions, FreeParam, RIDGE_GRID,
 };
 use super::machine::{Identified, Machine};
-use super::sim::RunView;
+use super::sim::{simulate_nodes, Init, RunView};
 use crate::error::{Error, Result};
 use crate::guard::{suspect_readings, Suspect};
 use crate::portable;
@@ -204,6 +205,24 @@ pub struct BaselineNetwork {
     /// but for the start, and has one solution).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub second_start: Option<StartCheck>,
+    /// Set when the least-squares drift map's node terms cancelled
+    /// ([`cancelling_term`]): the baseline and every candidate were then fitted with a ridge
+    /// penalty on them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drift_penalty: Option<DriftPenalty>,
+}
+
+/// Why and how much the drift map's node terms were penalised ([`BaselineNetwork`]).
+#[derive(Clone, Debug, Serialize)]
+pub struct DriftPenalty {
+    /// λ, relative to the node terms' mean square ([`CalibrationOptions::drift_ridge`]).
+    pub lambda: f64,
+    /// The term that cancelled in the least-squares map: its node, coefficient (µm/K), RMS
+    /// over the training rows (µm), and the axis's whole drift there (µm RMS).
+    pub node: String,
+    pub coefficient: f64,
+    pub term_um: f64,
+    pub drift_um: f64,
 }
 
 /// A candidate's calibration (screen, full fit, later round, backward check) also stops when a
@@ -312,6 +331,7 @@ fn baseline_of(
         recalibrated_joint_ssr: both.map(|(r, _)| r.joint_ssr),
         kept_joint_ssr: both.map(|(_, k)| k.joint_ssr),
         second_start: None,
+        drift_penalty: None,
     };
     // the baseline and its second start, in parallel
     let recal_checked = || -> Result<(Calibration, Holdout, StartCheck)> {
@@ -619,7 +639,7 @@ fn round_candidates(
             split,
             current.sigma_t,
             current.sigma_e,
-            false,
+            None,
         )?;
         let residual: Vec<f64> = sim.drift[axis_index].1[..split]
             .iter()
@@ -784,8 +804,40 @@ fn diagnose_on(
     let pg = opts.progress.as_deref();
     progress::stage(pg, 1);
     progress::plan(pg, 1);
-    let (baseline, base_hold, baseline_network) =
+    let (mut baseline, mut base_hold, mut baseline_network) =
         baseline_of(m, shared, train, &copts, &held, opts.network)?;
+    if copts.drift_ridge.is_none() {
+        // a drift map whose node terms cancel carries a start or any slow misfit into the
+        // held-out rows many times over: when a ridge penalty on them (toward the file's
+        // values) predicts the last part of the training rows from the rest better than least
+        // squares, the baseline is calibrated again with it, and every candidate keeps it
+        let temps = simulate_nodes(
+            &baseline.machine,
+            train,
+            &Init::Offsets(baseline.init.clone()),
+        )?;
+        if let Some((node, coef, term, drift)) =
+            cancelling_term(&baseline.machine, axis_index, &temps, split)
+        {
+            let tg = targets(m, train, &axis)?;
+            let share = opts.holdout_fraction;
+            let lambda = drift_penalty(m, axis_index, train, &temps, &tg.error, split, share)?;
+            // the smallest penalty is least squares, all but: the map as it is
+            if lambda > RIDGE_GRID[0] {
+                copts.drift_ridge = Some(lambda);
+                progress::plan(pg, 1);
+                (baseline, base_hold, baseline_network) =
+                    baseline_of(m, shared, train, &copts, &held, opts.network)?;
+                baseline_network.drift_penalty = Some(DriftPenalty {
+                    lambda,
+                    node,
+                    coefficient: coef,
+                    term_um: term,
+                    drift_um: drift,
+                });
+            }
+        }
+    }
     progress::step(pg);
     let base = Baseline::new(
         &baseline,
@@ -879,6 +931,7 @@ fn diagnose_on(
     evidence.push_str(&evidence::alternatives(&outcome.causes, &axis));
     evidence.push_str(&evidence::unsettled(&cands));
     evidence.push_str(&evidence::network(&baseline_network, &axis));
+    evidence.push_str(&evidence::drift_penalty(&baseline_network, &axis));
     evidence.push_str(&evidence::second_start(
         &baseline_network,
         &base_hold,

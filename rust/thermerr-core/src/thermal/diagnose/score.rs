@@ -43,7 +43,7 @@ pub(super) fn holdout(cal: &Calibration, held: &HeldOut<'_, '_>) -> Result<Holdo
         run.len(),
         cal.sigma_t,
         cal.sigma_e,
-        false,
+        None,
     )?;
     let e = &sim.drift[tg.axis_index].1;
     if from >= run.len() {
