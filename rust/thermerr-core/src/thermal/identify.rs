@@ -2019,7 +2019,8 @@ fn commented_toml(id: &Identification) -> Result<String> {
     for d in &m.drift {
         line("");
         line(&format!(
-            "# drift of {}: µm per K of each node's rise, least squares then calibrated",
+            "# drift of {}: µm per K of each node's rise, by ridge regression on the node \
+             temperatures simulated from the first readings (its penalty in the note above)",
             d.axis
         ));
         line("[[drift]]");

@@ -303,6 +303,30 @@ pub fn alternatives(causes: &[Accepted], axis: &str) -> String {
     out
 }
 
+/// The sentence when round 1 accepted `first` but the backward check dropped every cause (the
+/// rounds' sentences then say which and why): `verdict` is the baseline's, `none` or
+/// `unexplained`.
+pub fn all_dropped(
+    verdict: Verdict,
+    first: &Candidate,
+    base: &Holdout,
+    noise_um: f64,
+    axis: &str,
+) -> String {
+    let (b, ratio) = (base.rmse_um, base.rmse_um / noise_um);
+    let left = if verdict == Verdict::None {
+        format!("a held-out RMS error of {b:.2} µm on {axis}, within {ratio:.1}× the probe noise ({noise_um:.2} µm)")
+    } else {
+        format!("a structured held-out RMS error of {b:.2} µm on {axis} ({ratio:.1}× the probe noise of {noise_um:.2} µm)")
+    };
+    format!(
+        "Round 1 accepted {} (it {}), but the backward check dropped it and every cause after it, \
+         as said below: no cause is named, and the calibrated model leaves {left}.",
+        place(first.cause, first.column.as_deref(), first.node.as_deref()),
+        error_change(axis, base, first)
+    )
+}
+
 /// The sentence when no cause is named (`verdict` is `none` or `unexplained`).
 pub fn unnamed(
     verdict: Verdict,
@@ -315,10 +339,12 @@ pub fn unnamed(
     let best = cands
         .first()
         .map(|c| {
-            let why = if c.score >= min_score && c.gain_pct <= 0.0 {
-                format!(", which {}", error_change(axis, base, c))
-            } else {
-                String::new()
+            let why = match super::verdict::unsupported_because(c) {
+                Some(reason) if c.score >= min_score => format!(", {reason}"),
+                _ if c.score >= min_score && c.gain_pct <= 0.0 => {
+                    format!(", which {}", error_change(axis, base, c))
+                }
+                _ => String::new(),
             };
             format!("{} {:.0} %{why}", c.cause, 100.0 * c.score)
         })
@@ -326,11 +352,11 @@ pub fn unnamed(
     let (b, ratio, min) = (base.rmse_um, base.rmse_um / noise_um, 100.0 * min_score);
     if verdict == Verdict::None {
         format!(
-            "The calibrated model leaves a held-out RMS error of {b:.2} µm on {axis}, within {ratio:.1}× the probe noise ({noise_um:.2} µm); no extension removes {min:.0} % of the held-out residual (best: {best})."
+            "The calibrated model leaves a held-out RMS error of {b:.2} µm on {axis}, within {ratio:.1}× the probe noise ({noise_um:.2} µm); no extension that may be named removes {min:.0} % of the held-out residual (best: {best})."
         )
     } else {
         format!(
-            "The calibrated model leaves a structured held-out RMS error of {b:.2} µm on {axis} ({ratio:.1}× the probe noise of {noise_um:.2} µm), and no catalogued extension removes {min:.0} % of it (best: {best})."
+            "The calibrated model leaves a structured held-out RMS error of {b:.2} µm on {axis} ({ratio:.1}× the probe noise of {noise_um:.2} µm), and no catalogued extension that may be named removes {min:.0} % of it (best: {best})."
         )
     }
 }
@@ -408,6 +434,26 @@ mod tests {
             "{s}"
         );
         assert!(!s.contains("as well"), "{s}");
+    }
+
+    #[test]
+    fn a_best_candidate_that_may_not_be_named_says_why_and_a_dropped_round_1_is_said() {
+        let base = baseline();
+        let mut bic = candidate(Cause::ThermalLag, 0.45, 1.0, -5.0);
+        bic.delta_bic = -5.0;
+        let s = unnamed(Verdict::Unexplained, &[bic.clone()], &base, 0.1, "E_z", 0.1);
+        assert!(s.contains("(best: thermal_lag 45 %, not named: it does not improve the training fit enough (ΔBIC = -5"), "{s}");
+        assert!(
+            s.contains("no catalogued extension that may be named removes 10 %"),
+            "{s}"
+        );
+        let s = all_dropped(Verdict::Unexplained, &bic, &base, 0.1, "E_z");
+        assert!(s.starts_with("Round 1 accepted thermal_lag (it cuts the held-out RMS error of E_z from 2.55 to 1.00 µm"), "{s}");
+        assert!(
+            s.contains("no cause is named")
+                && s.contains("structured held-out RMS error of 2.55 µm"),
+            "{s}"
+        );
     }
 
     #[test]

@@ -915,9 +915,10 @@ fn diagnose_on(
         (None, Some(c)) => {
             evidence::named_later(c, &base_hold, final_hold, &axis, outcome.causes.len())
         }
-        (None, None) => {
-            evidence::unnamed(verdict, &cands, &base_hold, noise, &axis, opts.min_score)
-        }
+        (None, None) => match chosen1 {
+            Some(i) => evidence::all_dropped(verdict, &cands[i], &base_hold, noise, &axis),
+            None => evidence::unnamed(verdict, &cands, &base_hold, noise, &axis, opts.min_score),
+        },
     };
     evidence.push_str(&evidence::rounds(
         &outcome.rounds,

@@ -70,6 +70,36 @@ pub fn supported(c: &Candidate) -> bool {
         && c.mate_of.is_none()
 }
 
+/// Why [`supported`] refuses `c`, in words for the evidence (the first condition it fails);
+/// `None` when it is supported. A lower held-out RMS of the error axis is left to the caller,
+/// which says the change in the axis's own words.
+pub fn unsupported_because(c: &Candidate) -> Option<String> {
+    let col = c.column.as_deref().unwrap_or("its column");
+    if c.delta_bic >= MAX_DELTA_BIC {
+        return Some(format!(
+            "not named: it does not improve the training fit enough (ΔBIC = {:.0}, below {MAX_DELTA_BIC} needed)",
+            c.delta_bic
+        ));
+    }
+    if let Some(m) = &c.mate_of {
+        return Some(format!(
+            "not named: `{col}` follows the node sensor `{m}` (another sensor on a part the network has)"
+        ));
+    }
+    if let Some(m) = c.mates.as_ref().filter(|m| !m.corroborate) {
+        return Some(format!(
+            "not named: the other sensors on `{col}`'s part ({}) do not show the drift (the part warms; the sensor reads it)",
+            m.columns.join(", ")
+        ));
+    }
+    if let Some(g) = c.sensor_gain_pct.filter(|g| *g <= 0.0) {
+        return Some(format!(
+            "not named: it leaves `{col}`'s own held-out residual no better ({g:+.0} %)"
+        ));
+    }
+    None
+}
+
 /// The verdict and the index of the named candidate in `cands` (sorted by score, best first):
 /// the best supported candidate if its score reaches `min_score`; otherwise `none` when the
 /// baseline's held-out RMS is within `noise_ratio` noise levels, else `unexplained`.
