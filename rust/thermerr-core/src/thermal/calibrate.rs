@@ -407,12 +407,26 @@ pub fn ridge_drift(
     error: &Reading<'_>,
     rows: usize,
 ) -> Result<(Vec<f64>, f64)> {
-    let (basis, _) = drift_basis(m, d, run, temps)?;
-    if basis.is_empty() {
+    let (x, y) = kept_terms(m, d, run, temps, error, rows)?;
+    if x.is_empty() {
         return Ok((Vec::new(), 0.0));
     }
-    let x: Vec<Vec<f64>> = basis.iter().map(|b| error.kept(b, 0..rows)).collect();
-    ridge_by_folds(&x, &error.kept(error.values, 0..rows))
+    ridge_by_folds(&x, &y)
+}
+
+/// The drift terms of axis `d` ([`drift_basis`]) and the error, over the error's fitted rows
+/// among the first `rows`.
+fn kept_terms(
+    m: &Machine,
+    d: usize,
+    run: &RunView<'_>,
+    temps: &[f64],
+    error: &Reading<'_>,
+    rows: usize,
+) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
+    let (basis, _) = drift_basis(m, d, run, temps)?;
+    let x = basis.iter().map(|b| error.kept(b, 0..rows)).collect();
+    Ok((x, error.kept(error.values, 0..rows)))
 }
 
 /// A drift map's node terms cancel when one term alone swings more than this many times the
@@ -466,13 +480,9 @@ pub fn drift_penalty(
     rows: usize,
     held_share: f64,
 ) -> Result<f64> {
-    let (basis, _) = drift_basis(m, d, run, temps)?;
+    let (mut x, mut y) = kept_terms(m, d, run, temps, error, rows)?;
     let nominal: Vec<f64> = m.drift[d].um_per_k.values().copied().collect();
-    let x: Vec<Vec<f64>> = basis[..nominal.len()]
-        .iter()
-        .map(|b| error.kept(b, 0..rows))
-        .collect();
-    let mut y = error.kept(error.values, 0..rows);
+    x.truncate(nominal.len()); // the node terms come first
     for (c, col) in nominal.iter().zip(&x) {
         for (v, b) in y.iter_mut().zip(col) {
             *v -= c * b;
