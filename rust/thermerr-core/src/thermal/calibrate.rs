@@ -747,7 +747,8 @@ fn union(
 }
 
 /// Simulates `m` and returns (simulation with fitted drift, normalised data residuals over
-/// `rows`). The drift coefficients are re-solved on `rows`.
+/// `rows`). `refit_drift`: `None` keeps `m`'s drift map; `Some(ridge)` re-solves its
+/// coefficients on `rows` ([`fit_drift`], with `ridge` its penalty on the node terms).
 #[allow(clippy::too_many_arguments)]
 pub fn evaluate(
     m: &Machine,

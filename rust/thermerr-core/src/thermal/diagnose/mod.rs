@@ -806,6 +806,7 @@ fn diagnose_on(
     progress::plan(pg, 1);
     let (mut baseline, mut base_hold, mut baseline_network) =
         baseline_of(m, shared, train, &copts, &held, opts.network)?;
+    progress::step(pg);
     if copts.drift_ridge.is_none() {
         // a drift map whose node terms cancel carries a start or any slow misfit into the
         // held-out rows many times over: when a ridge penalty on them (toward the file's
@@ -828,6 +829,7 @@ fn diagnose_on(
                 progress::plan(pg, 1);
                 (baseline, base_hold, baseline_network) =
                     baseline_of(m, shared, train, &copts, &held, opts.network)?;
+                progress::step(pg);
                 baseline_network.drift_penalty = Some(DriftPenalty {
                     lambda,
                     node,
@@ -838,7 +840,6 @@ fn diagnose_on(
             }
         }
     }
-    progress::step(pg);
     let base = Baseline::new(
         &baseline,
         &base_hold,
