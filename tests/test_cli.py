@@ -27,6 +27,12 @@ def test_fit_and_evaluate_mlr(example_run1, example_run2, tmp_path, capsys):
     # the bundled example is linear in the node temperatures up to a small quadratic term:
     # a 20-sensor MLR must compensate most of it on the held-out run
     assert report["compensation_rate"] > 0.9
+    # the rows left out of the mean accuracy as a count (a run of days leaves out thousands,
+    # one line each when listed); the Python API keeps the list
+    run2 = tr.read_run(example_run2)
+    s = tr.scores(run2["E_z"], model.predict_run(run2))
+    assert "accuracy_excluded" not in report
+    assert report["n_accuracy_excluded"] == len(s.accuracy_excluded) > 0
 
 
 def test_fit_mlr_alpha_is_the_ridge_of_the_python_api(example_run1, tmp_path, capsys):

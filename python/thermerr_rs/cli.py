@@ -331,12 +331,12 @@ def cmd_fit(args: argparse.Namespace) -> int:
         report["selection"] = selection.to_dict()
     closed = model.predict_run(run)
     train = scores(run[args.axis], closed)
-    report["train"] = train.as_dict()
+    report["train"] = train.summary()
     loop = _loop(model)
     _print_scores(args, f"training run{loop}", train, run.source)
     one = _one_step(args, "training run", model, run, args.axis, closed)
     if one is not None:
-        report["train_one_step"] = one.as_dict()
+        report["train_one_step"] = one.summary()
     if args.test:
         test_run = _read(args, args.test)
         after = None
@@ -349,12 +349,12 @@ def cmd_fit(args: argparse.Namespace) -> int:
                        "start, as a gateway running since then (rises and history go on through the join)")
         closed = model.predict_run(test_run, after=after)
         held = scores(test_run[args.axis], closed)
-        report["test"] = held.as_dict()
+        report["test"] = held.summary()
         report["test_continues_training"] = after is not None
         _print_scores(args, f"held-out run {test_run.source}{loop}", held, test_run.source)
         one = _one_step(args, f"held-out run {test_run.source}", model, test_run, args.axis, closed, after)
         if one is not None:
-            report["test_one_step"] = one.as_dict()
+            report["test_one_step"] = one.summary()
     if not args.no_guard:
         from .guard import add_guard
 
@@ -412,8 +412,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
                       run.source)
     one = _one_step(args, f"{run.source}, axis {target}", model, run, target, closed, after)
     if args.json:
-        extra = {} if one is None else {"one_step": one.as_dict()}
-        _print_json({"axis": target, **s.as_dict(), "after": args.after, **extra})
+        extra = {} if one is None else {"one_step": one.summary()}
+        _print_json({"axis": target, **s.summary(), "after": args.after, **extra})
     return 0
 
 

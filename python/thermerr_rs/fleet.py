@@ -184,9 +184,7 @@ def _guarded(path: str, work: Callable[[], tuple[str | None, dict[str, Any]]]) -
 
 
 def _score_figures(s: Any) -> dict[str, Any]:
-    d = s.as_dict()
-    d.pop("accuracy_excluded", None)
-    return _finite(d)
+    return _finite(s.summary())
 
 
 def _finite(d: dict[str, Any]) -> dict[str, Any]:

@@ -33,6 +33,14 @@ class Scores:
     def as_dict(self) -> dict[str, Any]:
         return dict(self.__dict__)
 
+    def summary(self) -> dict[str, Any]:
+        """The figures with ``accuracy_excluded`` as its count, ``n_accuracy_excluded``: what
+        the CLI's ``--json`` and a fleet's summary print (a run of days leaves out thousands of
+        rows, one line each in the JSON)."""
+        d = self.as_dict()
+        d["n_accuracy_excluded"] = len(d.pop("accuracy_excluded"))
+        return d
+
     def __str__(self) -> str:
         def pct(v: float | None) -> str:
             return "n/a" if v is None else f"{100 * v:.2f} %"
