@@ -174,10 +174,11 @@ pub fn named(cands: &[Candidate], i: usize, base: &Holdout, axis: &str) -> Strin
     )
 }
 
-/// The sentence for a first named cause that was accepted after round 1 (round 1's cause was
-/// dropped by the backward check); `last`: the final model's held-out figures, with `n_named`
-/// causes in all.
+/// The sentences for a first named cause that was accepted after round 1: round 1's cause
+/// (`first`), which the backward check dropped, then the named one; `last`: the final model's
+/// held-out figures, with `n_named` causes in all.
 pub fn named_later(
+    first: Option<&Candidate>,
     c: &Accepted,
     base: &Holdout,
     last: &Holdout,
@@ -189,8 +190,15 @@ pub fn named_later(
         .iter()
         .map(|(k, v)| format!("{k} = {v:.4}"))
         .collect();
+    let round_1 = first.map_or(String::new(), |f| {
+        format!(
+            "Round 1 accepted {} (it {}), which the backward check drops (below). ",
+            place(f.cause, f.column.as_deref(), f.node.as_deref()),
+            error_change(axis, base, f)
+        )
+    });
     format!(
-        "The first cause that passes the backward check is {} ({}), accepted in round {}; {} the held-out RMS error of {axis} falls from {:.2} to {:.2} µm.",
+        "{round_1}The first cause that passes the backward check is {} ({}), accepted in round {}; {} the held-out RMS error of {axis} falls from {:.2} to {:.2} µm.",
         place(c.cause, c.column.as_deref(), c.node.as_deref()),
         params.join(", "),
         c.round,
@@ -419,14 +427,22 @@ mod tests {
                 && s.contains("within 5 % of 1.00 µm with `T_t7`) or better"),
             "{s}"
         );
-        let alone = named_later(&accepted(3, "T_t5"), &base, &last, "E_z", 1);
+        // round 1's cause, dropped later, is said before the first named one
+        let speed = candidate(Cause::SpeedGrowth, 0.2, 2.2, -50.0);
+        let alone = named_later(Some(&speed), &accepted(3, "T_t5"), &base, &last, "E_z", 1);
+        assert!(
+            alone.starts_with("Round 1 accepted speed_growth (it cuts the held-out RMS error of E_z from 2.55 to 2.20 µm")
+                && alone.contains("which the backward check drops (below). The first cause that passes the backward check is unmodeled_source on `T_t5`"),
+            "{alone}"
+        );
         assert!(
             alone.contains("on its own (the only cause named)"),
             "{alone}"
         );
         assert!(alone.contains("from 2.55 to 1.50 µm"), "{alone}");
-        let with = named_later(&accepted(3, "T_t5"), &base, &last, "E_z", 2);
+        let with = named_later(None, &accepted(3, "T_t5"), &base, &last, "E_z", 2);
         assert!(with.contains("with the other named causes"), "{with}");
+        assert!(with.starts_with("The first cause"), "{with}");
         let s = rounds(&[], &[accepted(1, "T_t7")], 0.0, 0.05, "E_z", true, 0.1);
         assert!(
             s.contains("(round 1) is dropped")

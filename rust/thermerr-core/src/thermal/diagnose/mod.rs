@@ -913,9 +913,14 @@ fn diagnose_on(
     let remainder_um = rounds::remainder_um(final_hold, noise, opts);
     let mut evidence = match (chosen, first) {
         (Some(i), _) => evidence::named(&cands, i, &base_hold, &axis),
-        (None, Some(c)) => {
-            evidence::named_later(c, &base_hold, final_hold, &axis, outcome.causes.len())
-        }
+        (None, Some(c)) => evidence::named_later(
+            chosen1.map(|i| &cands[i]),
+            c,
+            &base_hold,
+            final_hold,
+            &axis,
+            outcome.causes.len(),
+        ),
         (None, None) => match chosen1 {
             Some(i) => evidence::all_dropped(verdict, &cands[i], &base_hold, noise, &axis),
             None => evidence::unnamed(verdict, &cands, &base_hold, noise, &axis, opts.min_score),
