@@ -16,6 +16,10 @@ OpenBLAS kernel is AVX2: scipy's ``expm`` went through BLAS, whose AVX-512 kerne
 differently in the last bit, and three pairs flip on that. The generator now computes without
 BLAS, so these runs are the same bits on every CPU, and 28 is the figure.)
 
+Re-measured on 2026-11-27 with three + one candidates calibrated in full per round (four + two
+before; docs/machine-model.md, "Fewer full fits"): 33, 32 of 40 and 3, as with four + two since
+the simulation's arithmetic was made the same on every CPU; the floors now hold those figures.
+
 The results are deterministic (seeded runs, deterministic calibration), so the floors below are
 the measured figures: a change that names fewer pairs, gets more columns wrong or names more
 causes that are not there fails here and must be looked at, not re-measured away.
@@ -38,9 +42,9 @@ sys.modules[_spec.name] = dm  # its dataclass looks its module up while it is ma
 _spec.loader.exec_module(dm)
 
 HOURS, DT_S, SEEDS = (10.0, 5.0), 120.0, (1, 2)
-BOTH_NAMED_AT_LEAST = 31
-COLUMNS_RIGHT_AT_LEAST = 29
-NOT_HIDDEN_AT_MOST = 4
+BOTH_NAMED_AT_LEAST = 33
+COLUMNS_RIGHT_AT_LEAST = 32
+NOT_HIDDEN_AT_MOST = 3
 
 
 @pytest.fixture(scope="module")

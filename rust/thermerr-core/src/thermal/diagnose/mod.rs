@@ -29,8 +29,14 @@ pub const MIN_HOLDOUT_ROWS: usize = 10;
 /// Candidates of a round calibrated in full (the whole network refitted with the extension):
 /// the best by their screening fit (the network held at the current model's values), this many by
 /// training ΔBIC, then this many more by held-out score. The rest keep their screening figures.
-pub const FULL_FITS_BY_BIC: usize = 4;
-pub const FULL_FITS_BY_SCORE: usize = 2;
+/// The full fits are most of a diagnosis's time. Four and two before 2026-11-27; three and one
+/// took the real 46-h run's diagnosis from 9.6 to 6.5 s (medians of three, alternated), with the
+/// single-cause matrix and the identified rate sweep the same to the printed digit, the 10-h
+/// compound matrix (seeds 1-5) naming both causes in 89 of 150 pairs against 87 and a cause that
+/// was not hidden in 15 against 18, and the 20-h one (seeds 1-2) 46/60 both ways, its columns
+/// 39/40 against 40/40 (docs/machine-model.md, "Fewer full fits").
+pub const FULL_FITS_BY_BIC: usize = 3;
+pub const FULL_FITS_BY_SCORE: usize = 1;
 /// A screened candidate is calibrated in full only if its screen shows some evidence: a ΔBIC below
 /// this (the verdict's own bar) or a held-out score above [`SCREEN_MIN_SCORE`].
 pub const SCREEN_MIN_DELTA_BIC: f64 = -10.0;
