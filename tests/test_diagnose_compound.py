@@ -20,6 +20,11 @@ Re-measured on 2026-11-27 with three + one candidates calibrated in full per rou
 before; docs/machine-model.md, "Fewer full fits"): 33, 32 of 40 and 3, as with four + two since
 the simulation's arithmetic was made the same on every CPU; the floors now hold those figures.
 
+Re-measured on 2026-11-28 after the lag took only the node terms (linear and quadratic) in both
+the model and the generator (docs/machine-model.md, "The lag is the structure's"): 36, 32 of 40
+and 3 (a lag with a nonlinear expansion is named on both machines, a lag with an ambient coupling
+on the VMC); the floors hold those figures.
+
 The results are deterministic (seeded runs, deterministic calibration), so the floors below are
 the measured figures: a change that names fewer pairs, gets more columns wrong or names more
 causes that are not there fails here and must be looked at, not re-measured away.
@@ -42,7 +47,7 @@ sys.modules[_spec.name] = dm  # its dataclass looks its module up while it is ma
 _spec.loader.exec_module(dm)
 
 HOURS, DT_S, SEEDS = (10.0, 5.0), 120.0, (1, 2)
-BOTH_NAMED_AT_LEAST = 33
+BOTH_NAMED_AT_LEAST = 36
 COLUMNS_RIGHT_AT_LEAST = 32
 NOT_HIDDEN_AT_MOST = 3
 

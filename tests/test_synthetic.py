@@ -72,3 +72,27 @@ def test_cases_are_seeded_and_realistic():
     e = a.train["E_z"]
     assert 20 < np.ptp(e) < 120  # tens of µm of thermal error
     assert "T_cabinet" in a.train and "T_hydraulic" in a.train
+
+
+@pytest.mark.parametrize("topology", ["vmc", "lathe"])
+def test_a_lag_takes_the_expansion_and_not_the_room(topology):
+    """With a thermal lag hidden, the nonlinear expansion (the structure's own) goes through it
+    and the ambient coupling (the room, acting directly) does not: the same draws with the term
+    set to zero differ by exactly lag(q·ΔT²) and by k_amb·ΔT_amb, as the model reads lag_s."""
+    pair = ("thermal_lag", "nonlinear_expansion", "ambient_coupling")
+    node = next(nd for nd in syn.machine(topology)["nodes"] if "sensor" in nd)
+    on = {"node": node["name"]}
+    zero = {"nonlinear_expansion": {**on, "q": 0.0}, "ambient_coupling": {"k_amb": 0.0}}
+    full = syn.make_multi_case(topology, pair, 3, hours=(4.0, 1.0), dt=120.0, noise=False,
+                               params={"nonlinear_expansion": on})
+    base = syn.make_multi_case(topology, pair, 3, hours=(4.0, 1.0), dt=120.0, noise=False, params=zero)
+    axis, t = full.axis, full.train["time_s"]
+    p = full.params
+    rise = full.train[node["sensor"]] - full.train[node["sensor"]][0]
+    amb = full.train["T_ambient"]
+    want = (syn.lag(t, p["nonlinear_expansion.q"] * rise**2, p["thermal_lag.tau"])
+            + p["ambient_coupling.k_amb"] * (amb - amb[0]))
+    np.testing.assert_allclose(full.train[axis] - base.train[axis], want, atol=1e-9)
+    # and the lag matters here: the expansion unlagged would differ by far more than that
+    assert np.abs(p["nonlinear_expansion.q"] * rise**2 - syn.lag(t, p["nonlinear_expansion.q"] * rise**2,
+                                                                   p["thermal_lag.tau"])).max() > 0.1

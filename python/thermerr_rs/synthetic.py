@@ -6,8 +6,10 @@ system, computed by :func:`_expm` without BLAS, so that a seed gives the same ru
 bit on every CPU) of a "true" machine that may carry one effect the nominal model lacks:
 
 =====================  ===================================================================
-``thermal_lag``        the drift follows the temperatures through a first-order lag τ
-``ambient_coupling``   the shop air moves the error directly: + k_amb·(T_amb − T_amb(0))
+``thermal_lag``        the structure's drift (its linear and quadratic terms on the nodes)
+                       follows the temperatures through a first-order lag τ
+``ambient_coupling``   the shop air moves the error directly: + k_amb·(T_amb − T_amb(0)),
+                       not through a lag
 ``speed_growth``       instantaneous growth with spindle speed: + g·(n/n_ref)²
 ``unmodeled_source``   a heat source outside the model (a hydraulic unit) whose temperature
                        is measured in ``T_hydraulic`` heats a node through a conductance
@@ -321,8 +323,8 @@ def _run(
             cols[nd["sensor"]] = np.full(len(t), amb[0])
     src = effects.get("unmodeled_source")
     source = (src["node"], "T_hydraulic", src["g"]) if src else None
-    lag = effects.get("thermal_lag")
-    sim = simulate_truth(m, cols, lag_s=lag["tau"] if lag else None, source=source)
+    effect_lag = effects.get("thermal_lag")
+    sim = simulate_truth(m, cols, lag_s=effect_lag["tau"] if effect_lag else None, source=source)
     axis = m["drift"][0]["axis"]
     e = sim["drift:lag"].copy()
     if hp := effects.get("ambient_coupling"):
@@ -332,7 +334,8 @@ def _run(
         e += hp["g"] * (rpm / src0["ref"]) ** 2 - hp["g"] * (rpm[0] / src0["ref"]) ** 2
     if hp := effects.get("nonlinear_expansion"):
         rise = sim[hp["node"]] - sim[hp["node"]][0]
-        e += hp["q"] * rise**2
+        # the structure's expansion, so through the structure's lag as its linear part is
+        e += hp["q"] * (rise**2 if effect_lag is None else lag(t, rise**2, effect_lag["tau"]))
     if hp := effects.get("periodic"):
         e += hp["amp"] * np.sin(2 * np.pi * t / hp["period_s"])
     for nd in m["nodes"]:

@@ -214,6 +214,54 @@ fn toml_round_trip_simulates_identically() {
 }
 
 #[test]
+fn the_lag_takes_the_structure_and_the_room_acts_directly() {
+    // one heated node; the room steps up by 2 K at 600 s
+    let mut m = Machine::from_toml(ONE_NODE, "one.toml").unwrap();
+    let t: Vec<f64> = (0..=60).map(|k| k as f64 * 60.0).collect();
+    let n = t.len();
+    let amb: Vec<f64> = t
+        .iter()
+        .map(|&s| if s < 600.0 { 20.0 } else { 22.0 })
+        .collect();
+    let r = run(vec![
+        ("time_s", t.clone()),
+        ("T_ambient", amb.clone()),
+        ("T_a", vec![20.0; n]),
+        ("U_rpm", vec![1000.0; n]),
+        ("E_z", vec![0.0; n]),
+    ]);
+    let view = RunView::new(&r);
+    let tau = 900.0;
+    m.drift[0].quadratic_um_per_k2.insert("a".into(), 0.05);
+    let plain = simulate(&m, &view, &Init::FirstReading).unwrap();
+    m.drift[0].ambient_um_per_k = Some(1.5);
+    let with_room = simulate(&m, &view, &Init::FirstReading).unwrap();
+    m.drift[0].lag_s = Some(tau);
+    let lagged_room = simulate(&m, &view, &Init::FirstReading).unwrap();
+    m.drift[0].ambient_um_per_k = None;
+    let lagged = simulate(&m, &view, &Init::FirstReading).unwrap();
+    let structure: Vec<f64> = plain.drift[0].1.clone();
+    let through_lag = thermerr_core::thermal::sim::lag(&t, &structure, tau);
+    for k in 0..n {
+        let room = 1.5 * (amb[k] - amb[0]);
+        // without a lag: the structure's terms (linear and quadratic) and the room, added
+        assert_relative_eq!(with_room.drift[0].1[k], structure[k] + room, epsilon = 1e-9);
+        // the lag filters the node terms, linear and quadratic alike ...
+        assert_relative_eq!(lagged.drift[0].1[k], through_lag[k], epsilon = 1e-9);
+        // ... and the room's term is added as it is: the room acts on the axis directly
+        assert_relative_eq!(
+            lagged_room.drift[0].1[k],
+            through_lag[k] + room,
+            epsilon = 1e-9
+        );
+    }
+    assert!(
+        through_lag[20] < 0.9 * structure[20],
+        "the lag must filter something here"
+    );
+}
+
+#[test]
 fn lag_reaches_63_percent_at_tau() {
     let t: Vec<f64> = (0..=100).map(|k| k as f64 * 10.0).collect();
     let mut y = vec![1.0; t.len()];

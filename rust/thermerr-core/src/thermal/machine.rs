@@ -6,7 +6,7 @@
 //! |---|---|---|---|
 //! | `sensor_offset_k` | node | the sensor reads node + offset | K |
 //! | `sensor_drift_k_per_h` | node | the sensor reading drifts away from the node at this rate (sensor_drift) | K/h |
-//! | `lag_s` | drift | the thermal part of the drift follows through a first-order lag (thermal_lag) | s |
+//! | `lag_s` | drift | the node terms of the drift (linear and quadratic: the structure's) follow through a first-order lag (thermal_lag); the ambient, column and input terms act directly | s |
 //! | `ambient_um_per_k` | drift | direct term on the ambient's change since t = 0 (ambient_coupling) | µm/K |
 //! | `quadratic_um_per_k2` | drift | term on the square of a node's rise (nonlinear_expansion) | µm/K² |
 //! | `[[drift.inputs]]` `input`, `um`, `ref`, `exponent` | drift | instantaneous term um·((u/ref)^exponent − (u₀/ref)^exponent) (speed_growth) | µm |

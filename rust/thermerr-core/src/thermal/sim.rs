@@ -755,7 +755,9 @@ pub fn finish(mach: &Machine, run: &RunView<'_>, temps: Vec<f64>) -> Result<Simu
 }
 
 /// The terms of one drift axis as (coefficient, series): `lagged` ones pass through the axis'
-/// lag (if any), `instant` ones do not. Every series is zero at t = 0.
+/// lag (if any), `instant` ones do not. Every series is zero at t = 0. The lag is the
+/// structure's (its bulk follows its sensors late), so it takes the node terms, linear and
+/// quadratic; the room (`ambient_um_per_k`), a spare column and the inputs act directly.
 pub struct DriftTerms {
     pub lagged: Vec<(f64, Vec<f64>)>,
     pub instant: Vec<(f64, Vec<f64>)>,
@@ -796,17 +798,18 @@ pub fn drift_terms(
         out.labels_lagged
             .push(format!("quadratic_um_per_k2.{name}"));
     }
+    // the room and a spare column act on the axis directly, not through the structure's lag
     if let Some(k_amb) = d.ambient_um_per_k {
         let amb = ambient_series(mach, run)?;
-        out.lagged
+        out.instant
             .push((k_amb, amb.iter().map(|v| v - amb[0]).collect()));
-        out.labels_lagged.push("ambient_um_per_k".into());
+        out.labels_instant.push("ambient_um_per_k".into());
     }
     for c in &d.columns {
         let col = run.col(&c.column)?;
-        out.lagged
+        out.instant
             .push((c.um_per_k, col.iter().map(|v| v - col[0]).collect()));
-        out.labels_lagged.push(format!("columns.{}", c.column));
+        out.labels_instant.push(format!("columns.{}", c.column));
     }
     for term in &d.inputs {
         let u = run.col(&term.input)?;
