@@ -353,8 +353,10 @@ def diagnose(run: Run, machine: Machine, holdout: Run | None = None, *, axis: st
     a start stops at the iteration limit, or a second start fits the training rows as well and
     holds out differently),
     ``"recalibrate"`` (every capacity, conductance and source fitted on the training rows
-    and this axis; ``report["baseline_network"]["second_start"]`` says whether a second start
-    ends elsewhere), ``"keep"`` (the machine's network as given, only the initial offsets and the
+    and this axis, from the file's values and from a second start 25 % off them;
+    ``report["baseline_network"]["second_start"]`` says whether the second start ends elsewhere,
+    and ``taken`` when it fits the training rows better by more than 5 % and so is the
+    baseline), ``"keep"`` (the machine's network as given, only the initial offsets and the
     drift map fitted: a network identified from this very run, or one you trust), ``"best"``
     (both, and the one with the smaller held-out residual of the error and the temperatures
     together, noise-normalised; ``report["baseline_network"]`` gives

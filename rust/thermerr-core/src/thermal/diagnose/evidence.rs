@@ -10,11 +10,11 @@ use super::{
 /// Which network the baseline has, when it is not the default (recalibrated on the axis).
 pub fn network(b: &BaselineNetwork, axis: &str) -> String {
     match (b.rule, b.recalibrated_rmse_um, b.kept_rmse_um) {
-        (NetworkRule::Auto, Some(r), Some(k)) if b.network == NetworkUsed::Kept => {
+        (NetworkRule::Auto, Some(_), Some(k)) if b.network == NetworkUsed::Kept => {
             let why = b
                 .second_start
                 .as_ref()
-                .map_or_else(String::new, |s| not_unique(s, r, axis));
+                .map_or_else(String::new, |s| not_unique(s, axis));
             format!(
                 " The network was identified from data, and its recalibration on this axis is not \
                  unique: {why}. The training rows cannot choose a recalibrated network, so the \
@@ -62,16 +62,42 @@ pub fn drift_penalty(b: &BaselineNetwork, axis: &str) -> String {
 }
 
 /// What a second start of the recalibrated baseline says, when it ends elsewhere held out.
-pub fn second_start(b: &BaselineNetwork, first: &Holdout, axis: &str) -> String {
-    match &b.second_start {
-        Some(s) if !s.unique && b.network == NetworkUsed::Recalibrated => format!(
+pub fn second_start(b: &BaselineNetwork, axis: &str) -> String {
+    let Some(s) = b
+        .second_start
+        .as_ref()
+        .filter(|_| b.network == NetworkUsed::Recalibrated)
+    else {
+        return String::new();
+    };
+    let taken = if s.taken {
+        format!(
+            " The calibration from the machine file's values stopped in a poorer minimum: \
+             started with every network parameter {:.0} % off them, it fits the training rows \
+             better (SSR {:.2}x), so that calibration is the baseline ({:.2} µm held out on \
+             {axis}; {:.2} µm from the file's values).",
+            100.0 * (SECOND_START_FACTOR - 1.0),
+            s.training_ssr_ratio,
+            s.rmse_um,
+            s.first_rmse_um,
+        )
+    } else {
+        String::new()
+    };
+    match (s.unique, s.taken) {
+        (true, _) => taken,
+        (false, true) => format!(
+            "{taken} Two minima of one calibration may not be all of them: the training rows do \
+             not pin the network down, and `--network keep` or `best` (for a network identified \
+             from this run, or one you trust) gives a baseline with one solution."
+        ),
+        (false, false) => format!(
             " The baseline's calibration is not unique on this run: {}. The training rows do not \
              pin the network down, and what is named here was found from the file's values; \
              `--network keep` or `best` (for a network identified from this run, or one you \
              trust) gives a baseline with one solution.",
-            not_unique(s, first.rmse_um, axis)
+            not_unique(s, axis)
         ),
-        _ => String::new(),
     }
 }
 
@@ -92,8 +118,9 @@ pub fn unsettled(cands: &[Candidate]) -> String {
     }
 }
 
-/// Why a recalibration is not unique (`first`: its held-out RMS from the file's values).
-fn not_unique(s: &StartCheck, first: f64, axis: &str) -> String {
+/// Why a recalibration is not unique.
+fn not_unique(s: &StartCheck, axis: &str) -> String {
+    let first = s.first_rmse_um;
     if !s.converged {
         format!(
             "from the file's values or from every network parameter {:.0} % off, the search \

@@ -252,11 +252,15 @@ pub const START_SPREAD: f64 = 0.10;
 /// that fitted worse did so by 1.10x or more.)
 pub const TRAINING_TIE: f64 = 1.05;
 
-/// The recalibrated baseline from a second start ([`SECOND_START_FACTOR`]).
+/// The recalibrated baseline from a second start ([`SECOND_START_FACTOR`]); when it fits the
+/// training rows clearly better than the start from the file's values (`taken`), it is the
+/// baseline.
 #[derive(Clone, Debug, Serialize)]
 pub struct StartCheck {
     /// Held-out RMS of the error axis from the second start (µm).
     pub rmse_um: f64,
+    /// Held-out RMS of the error axis from the file's values, the first start (µm).
+    pub first_rmse_um: f64,
     /// Its normalised training SSR over the first start's (below 1: the second fits the
     /// training rows better).
     pub training_ssr_ratio: f64,
@@ -269,6 +273,11 @@ pub struct StartCheck {
     /// well or better from the second start and the held-out figures differ, so the training
     /// rows do not pin the network down.
     pub unique: bool,
+    /// The second start is the baseline: both starts converged and it fits the training rows
+    /// better than the first by more than [`TRAINING_TIE`] (SSR ratio below 1/1.05). Both are
+    /// minima of the same objective, and the search from the file's values stopped in the
+    /// poorer one (a calibration is the least cost it finds, not the one nearest the file).
+    pub taken: bool,
 }
 
 impl StartCheck {
@@ -279,9 +288,11 @@ impl StartCheck {
         let converged = first.0.converged && second.0.converged;
         StartCheck {
             rmse_um: r2,
+            first_rmse_um: r1,
             training_ssr_ratio: ratio,
             converged,
             unique: converged && (ratio > TRAINING_TIE || (r2 - r1).abs() <= tol),
+            taken: converged && ratio * TRAINING_TIE < 1.0,
         }
     }
 }
@@ -315,10 +326,6 @@ fn baseline_of(
     };
     let recal = || recal_from(None);
     let second = || recal_from(Some(second_start(m, copts)));
-    let check = |c: &Calibration, h: &Holdout| -> Result<StartCheck> {
-        let (c2, h2) = second()?;
-        Ok(StartCheck::of((c, h), (&c2, &h2)))
-    };
     let kept_of = |m: &Machine| -> Result<(Calibration, Holdout)> {
         let o = CalibrationOptions {
             thermal: false,
@@ -344,7 +351,8 @@ fn baseline_of(
         let (first, other) = rayon::join(recal, second);
         let ((c, h), (c2, h2)) = (first?, other?);
         let s = StartCheck::of((&c, &h), (&c2, &h2));
-        Ok((c, h, s))
+        // the better of two minima of the same objective is the calibration
+        Ok(if s.taken { (c2, h2, s) } else { (c, h, s) })
     };
     Ok(match rule {
         NetworkRule::Auto if m.identified.is_some() => {
@@ -384,14 +392,14 @@ fn baseline_of(
             (c, h, choice(NetworkUsed::Shared, None))
         }
         NetworkRule::Best => {
-            let (r, k) = rayon::join(recal, kept);
-            let ((rc, rh), (kc, kh)) = (r?, k?);
+            let (r, k) = rayon::join(recal_checked, kept);
+            let ((rc, rh, s), (kc, kh)) = (r?, k?);
             if kh.joint_ssr < rh.joint_ssr {
                 let b = choice(NetworkUsed::Kept, Some((&rh, &kh)));
                 (kc, kh, b)
             } else {
                 let b = BaselineNetwork {
-                    second_start: Some(check(&rc, &rh)?),
+                    second_start: Some(s),
                     ..choice(NetworkUsed::Recalibrated, Some((&rh, &kh)))
                 };
                 (rc, rh, b)
@@ -945,11 +953,7 @@ fn diagnose_on(
     evidence.push_str(&evidence::unsettled(&cands));
     evidence.push_str(&evidence::network(&baseline_network, &axis));
     evidence.push_str(&evidence::drift_penalty(&baseline_network, &axis));
-    evidence.push_str(&evidence::second_start(
-        &baseline_network,
-        &base_hold,
-        &axis,
-    ));
+    evidence.push_str(&evidence::second_start(&baseline_network, &axis));
     let probe = targets(&baseline.machine, held.run, &axis)?.error;
     let n_held = held.run.len() - held.from;
     let scored = (held.from..held.run.len())
@@ -1199,6 +1203,16 @@ pub(crate) mod tests {
         let worse = StartCheck::of((&c2, &holdout(2.0)), (&stopped, &holdout(4.0)));
         assert!(!worse.unique && worse.training_ssr_ratio > TRAINING_TIE);
         assert!(check(2.0, 2.0).converged);
+        // the second start is the baseline when both settled and it fits clearly better
+        assert!(check(2.0, 2.0).taken && check(2.0, 4.0).taken);
+        assert_eq!(check(2.0, 4.0).first_rmse_um, 2.0);
+        let near = StartCheck::of((&cal(100.0), &holdout(2.0)), (&cal(96.0), &holdout(4.0)));
+        assert!(!near.taken && !tie.taken && !worse.taken);
+        let s = StartCheck::of((&stopped, &holdout(2.0)), (&c2, &holdout(2.0)));
+        assert!(
+            !s.taken,
+            "a start at the iteration limit is no minimum to compare"
+        );
     }
 
     #[test]
