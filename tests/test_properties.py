@@ -127,6 +127,12 @@ def _is_data(name: str) -> bool:
 @example(("time_s,T_a\n0,1e308\n1,\n2,-1e308\n", ["time_s", "T_a"],
           [[("0", 0.0), ("1e308", 1e308)], [("1", 1.0), ("", math.nan)], [("2", 2.0), ("-1e308", -1e308)]]),
          "interpolate")
+# found here (2026-11-28): a quote never closed ran to the end of the file, and the reader
+# returned the rows before it, or read the cell as the number after the quote
+@example(('time_s,note\n\n1.0,0.0\n\n2.0,0.0\n\n4.0,"1\n\n5.0,0.0', ["time_s", "note"],
+          [[("1.0", 1.0), ("0.0", None)], [("2.0", 2.0), ("0.0", None)], [("4.0", 4.0), ('"1', None)],
+           [("5.0", 5.0), ("0.0", None)]]), "error")
+@example(('time_s,T_a\n\n1.0,"1', ["time_s", "T_a"], [[("1.0", 1.0), ('"1', None)]]), "error")
 def test_read_run_returns_the_numbers_or_refuses(case: Any, nan: str) -> None:
     text, names, rows = case
     got = _read(text, nan)

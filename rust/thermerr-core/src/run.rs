@@ -146,6 +146,7 @@ impl Run {
         // the file's line of each record, counted here from its byte offset: the csv crate's
         // own count is one short after CRLF line ends and blank lines (rust-csv #395, #208)
         let mut lines_to = LineCount::default();
+        let mut last_start = None;
         loop {
             match rdr.read_record(&mut record) {
                 Ok(false) => break,
@@ -153,11 +154,27 @@ impl Run {
                 Err(e) => return Err(csv_error(&file, bytes, e)),
             }
             row += 1;
+            last_start = record.position().map(|p| p.byte() as usize);
             let line = record
                 .position()
                 .map(|p| lines_to.line_at(bytes, p.byte()))
                 .unwrap_or(row + 1);
             for (j, cell) in record.iter().enumerate() {
+                if cell.contains(['\n', '\r']) {
+                    // a quoted cell over several lines: a run has one sample per line, and a
+                    // quote left open (`"1`) would take the samples after it into this cell
+                    return Err(Error::Parse {
+                        file: file.clone(),
+                        line: Some(line),
+                        row: Some(row),
+                        column: Some(names[j].clone()),
+                        reason: format!(
+                            "a quoted cell runs over {} lines (a `\"` left open?): a run has one \
+                             sample per line",
+                            cell.matches('\n').count() + 1
+                        ),
+                    });
+                }
                 if !parsed[j] {
                     cells[j].push(f64::NAN);
                     continue;
@@ -183,6 +200,22 @@ impl Run {
                 cells[j].push(v);
             }
             lines.push(line);
+        }
+        // the csv reader takes a quote that is never closed to run to the end of the file: the
+        // rest of the file would be one cell, its rows silently gone (only the last record can
+        // hold such a quote)
+        if let Some(j) =
+            last_start.and_then(|b| unclosed_quote(&bytes[b.min(bytes.len())..], delimiter))
+        {
+            return Err(Error::Parse {
+                file,
+                line: lines.last().copied(),
+                row: Some(row),
+                column: names.get(j).cloned(),
+                reason: "a quoted cell (`\"`) opened here is never closed: the rest of the file \
+                         would be read as this one cell"
+                    .to_string(),
+            });
         }
         Run::from_columns(&file, names, cells, nan, Some(&lines))
     }
@@ -489,6 +522,41 @@ impl LineCount {
     }
 }
 
+/// The field (0-based) of the record at the start of `bytes` whose quote is still open at the
+/// end of `bytes`, if any: a quote opens a field only as its first byte (as the csv reader reads
+/// it), `""` inside is a quote, and the record ends at a line end outside quotes.
+fn unclosed_quote(bytes: &[u8], delimiter: u8) -> Option<usize> {
+    let mut i = bytes
+        .iter()
+        .take_while(|&&b| matches!(b, b'\r' | b'\n'))
+        .count();
+    let (mut field, mut at_start, mut quoted) = (0usize, true, false);
+    while i < bytes.len() {
+        let b = bytes[i];
+        if quoted {
+            if b == b'"' {
+                if bytes.get(i + 1) == Some(&b'"') {
+                    i += 2;
+                    continue;
+                }
+                quoted = false;
+            }
+        } else if at_start && b == b'"' {
+            quoted = true;
+        } else if b == delimiter {
+            field += 1;
+            at_start = true;
+            i += 1;
+            continue;
+        } else if matches!(b, b'\r' | b'\n') {
+            return None;
+        }
+        at_start = false;
+        i += 1;
+    }
+    quoted.then_some(field)
+}
+
 fn csv_error(file: &str, bytes: &[u8], e: csv::Error) -> Error {
     let line = e
         .position()
@@ -595,6 +663,41 @@ mod tests {
     fn err(text: &[u8], nan: NanPolicy) -> String {
         let p = write(text);
         Run::read_csv(&p.0, nan).unwrap_err().to_string()
+    }
+
+    #[test]
+    fn a_quote_never_closed_is_refused_not_read_as_the_rest_of_the_file() {
+        // found by the property test: the csv reader ran the quote to the end of the file and
+        // the rows after it were gone (a note column), or the cell read as the number after it
+        let e = read_err(b"time_s,note\n1.0,0.0\n4.0,\"1\n\n5.0,0.0\n", b',');
+        assert!(
+            e.contains("t.csv")
+                && e.contains("line 3")
+                && e.contains("note")
+                && e.contains("one sample per line"),
+            "{e}"
+        );
+        let e = read_err(b"time_s,T_a\n\n1.0,\"1", b',');
+        assert!(e.contains("T_a") && e.contains("never closed"), "{e}");
+        // a quote that closes lines later takes the samples between into one cell
+        let e = read_err(b"time_s,note,T_a\n1,\"1,2\n2,x,3\n3,\"y\",4\n", b',');
+        assert!(
+            e.contains("line 2") && e.contains("note") && e.contains("runs over 3 lines"),
+            "{e}"
+        );
+        let e = read_err(b"time_s;note;T_a\n1;\"a\r\nb\";2\n2;x;3\n", b';');
+        assert!(e.contains("one sample per line"), "{e}");
+        // quotes that close, escaped quotes and a quote inside an unquoted cell are fine
+        for text in [
+            &b"time_s,note,T_a\n1,\"a, \"\"b\"\"\",2\n2,x,3\n"[..],
+            &b"time_s,note,T_a\n1,12\",2\n2,x,3\n"[..],
+        ] {
+            let r = Run::from_csv_reader_with(text, "t.csv", NanPolicy::Error, b',').unwrap();
+            assert_eq!(r.len(), 2);
+        }
+        assert_eq!(unclosed_quote(b"1,\"a\"\"\"\n2,3", b','), None);
+        assert_eq!(unclosed_quote(b"1,\"a\"\"\n2,3", b','), Some(1));
+        assert_eq!(unclosed_quote(b"\n1,2,\"a\n\n3", b','), Some(2));
     }
 
     #[test]
