@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import json
+import warnings
 
 import numpy as np
 import pytest
+from sklearn.exceptions import ConvergenceWarning
 from sklearn.svm import SVR as SkSVR
 
 import thermerr_rs as tr
@@ -74,8 +76,13 @@ def test_max_iter_stops_early_like_scikit_learn() -> None:
     ref = SkSVR(C=10.0, epsilon=0.01, max_iter=50)
     with pytest.warns(Warning):
         ref.fit(x, y)
-    ours = tr.SVR(C=10.0, epsilon=0.01, max_iter=50).fit(x, y)
+    with pytest.warns(ConvergenceWarning, match="stopped at max_iter=50"):
+        ours = tr.SVR(C=10.0, epsilon=0.01, max_iter=50).fit(x, y)
     assert ours.n_iter_ == ref.n_iter_ == 50
+    # converged within the cap: no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConvergenceWarning)
+        tr.SVR(C=10.0, epsilon=0.01, max_iter=10**6).fit(x, y)
     np.testing.assert_allclose(ours.predict(x), ref.predict(x), rtol=0, atol=1e-9)
 
 

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
+from sklearn.exceptions import ConvergenceWarning
 
 from . import _core
 from ._arrays import F64
@@ -26,7 +28,8 @@ class SVR(Regressor):
     kernel : ``"rbf"`` — k(x, x') = exp(−γ‖x − x'‖²) — or ``"linear"``.
     gamma : ``"scale"`` (1 / (n_features · X.var())), ``"auto"`` (1 / n_features) or a number.
     tol : stopping tolerance. shrinking : use LIBSVM's shrinking heuristic.
-    cache_size : kernel cache in MiB. max_iter : iteration cap, −1 for none.
+    cache_size : kernel cache in MiB. max_iter : iteration cap, −1 for none (a fit stopped by it
+    warns with scikit-learn's ``ConvergenceWarning``, as scikit-learn's ``SVR`` does).
 
     Fitted attributes: ``support_``, ``support_vectors_``, ``dual_coef_`` (shape (1, n_SV)),
     ``intercept_`` (shape (1,)), ``n_iter_``, ``gamma_`` (the resolved γ).
@@ -66,6 +69,12 @@ class SVR(Regressor):
             gamma=gamma, tol=float(self.tol), shrinking=bool(self.shrinking),
             cache_size=float(self.cache_size), max_iter=None if max_iter == -1 else max_iter,
         )
+        if max_iter != -1 and self._inner.n_iter >= max_iter:
+            # as scikit-learn's SVR says it: a fit cut off by the cap is not the solution
+            warnings.warn(f"SVR: the solver stopped at max_iter={max_iter} before its stopping rule "
+                          f"(largest KKT violation < tol={self.tol}) was met, so the fit is not converged; "
+                          "scale X and y (e.g. StandardScaler) or raise max_iter", ConvergenceWarning,
+                          stacklevel=3)
 
     def _predict(self, x: F64) -> F64:
         assert self._inner is not None
