@@ -26,6 +26,7 @@ hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, assume, example, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 from hypothesis.extra import numpy as hnp  # noqa: E402
+from sklearn.exceptions import ConvergenceWarning  # noqa: E402
 
 import thermerr_rs as tr  # noqa: E402
 
@@ -441,9 +442,14 @@ def test_svr_does_not_depend_on_row_order(data: Any, rnd: Any, kernel: str) -> N
     perm = np.array(rnd.sample(range(len(x)), len(x)))
     params = dict(C=10.0, epsilon=0.1, kernel=kernel, gamma=0.01, tol=1e-12, shrinking=False, max_iter=10**6)
     try:
-        a = tr.SVR(**params).fit(x, y)
-        b = tr.SVR(**params).fit(x[perm], y[perm])
-    except tr.ConvergenceError:
+        with warnings.catch_warnings():
+            # a fit stopped at max_iter has not reached the optimum, so where it stops depends on
+            # the path, as scikit-learn's does to the bit (test_svr.py's unconverged case): the
+            # property is about the optimum
+            warnings.simplefilter("error", ConvergenceWarning)
+            a = tr.SVR(**params).fit(x, y)
+            b = tr.SVR(**params).fit(x[perm], y[perm])
+    except (tr.ConvergenceError, ConvergenceWarning):
         assume(False)
         return
     # w is unique, the intercept only when some support vector is clearly free (1e-6 C < |alpha| <
