@@ -25,6 +25,11 @@ the model and the generator (docs/machine-model.md, "The lag is the structure's"
 and 3 (a lag with a nonlinear expansion is named on both machines, a lag with an ambient coupling
 on the VMC); the floors hold those figures.
 
+Re-measured on 2026-11-28 after a round with no passing candidate tries its strongest one as a
+pair with the best of each other cause (docs/machine-model.md, "Two that pass only together"):
+38, 33 of 40 and 3 (a lag with speed growth on the lathe, both seeds; a drifting `T_carriage`
+named with a nonlinear expansion, seed 1, where before nothing was); the floors hold those.
+
 The results are deterministic (seeded runs, deterministic calibration), so the floors below are
 the measured figures: a change that names fewer pairs, gets more columns wrong or names more
 causes that are not there fails here and must be looked at, not re-measured away.
@@ -47,8 +52,8 @@ sys.modules[_spec.name] = dm  # its dataclass looks its module up while it is ma
 _spec.loader.exec_module(dm)
 
 HOURS, DT_S, SEEDS = (10.0, 5.0), 120.0, (1, 2)
-BOTH_NAMED_AT_LEAST = 36
-COLUMNS_RIGHT_AT_LEAST = 32
+BOTH_NAMED_AT_LEAST = 38
+COLUMNS_RIGHT_AT_LEAST = 33
 NOT_HIDDEN_AT_MOST = 3
 
 

@@ -258,7 +258,8 @@ def render_html(report: dict[str, Any], series: dict[str, Any], network: dict[st
         f"<tr><td>{r['round']}</td><td>{esc(r['cause'] or '—')}</td><td>{esc(str(r.get('column') or ''))}</td>"
         f"<td>{r['rmse_before_um']:.3f}</td><td>{r['rmse_um']:.3f}</td><td>{r['gain_pct']:.1f}</td>"
         f"<td>{100 * r['excess_share']:.0f}</td>"
-        f"<td>{'named' if r['kept'] else ('dropped by the backward check' if r['accepted'] else 'not accepted')}</td></tr>"
+        f"<td>{'named' if r['kept'] else ('dropped by the backward check' if r['accepted'] else 'not accepted')}"
+        f"{' (as a pair)' if r.get('paired') else ''}</td></tr>"
         for r in report.get("rounds", [])
     )
     rem = report.get("remainder_um", 0.0)

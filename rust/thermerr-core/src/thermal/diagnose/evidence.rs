@@ -251,10 +251,34 @@ pub fn rounds(
     min_score: f64,
 ) -> String {
     let mut out = String::new();
-    for r in rounds.iter().filter(|r| r.round > 1) {
+    for (k, r) in rounds.iter().enumerate() {
         let what = r
             .cause
             .map(|c| place(c, r.column.as_deref(), r.node.as_deref()));
+        if r.paired {
+            // the lead speaks for the pair; the partner is the next entry
+            if let (Some(what), Some(p)) = (what, rounds.get(k + 1).filter(|p| p.paired)) {
+                let partner = p.cause.map_or(String::new(), |c| {
+                    place(c, p.column.as_deref(), p.node.as_deref())
+                });
+                out.push_str(&format!(
+                    " Rounds {} and {} take {what} and {partner} as a pair: no single extension passed (alone {what}, the strongest by training evidence with ΔBIC = {:.0}, moves the held-out RMS error of {axis} from {:.2} to {:.2} µm); fitted together they lower it to {:.2} µm ({:.0} %), {:.0} % of what stayed above the probe noise, ΔBIC = {:.0}, and each passes a later round's rule against the other alone.",
+                    r.round,
+                    p.round,
+                    r.delta_bic,
+                    r.rmse_before_um,
+                    r.rmse_um,
+                    p.rmse_um,
+                    p.gain_pct,
+                    100.0 * p.excess_share,
+                    p.delta_bic
+                ));
+            }
+            continue;
+        }
+        if r.round == 1 {
+            continue; // round 1's sentence comes first, from the verdict
+        }
         match (what, r.accepted) {
             (Some(what), true) => out.push_str(&format!(
                 " Round {} adds {what}, fitted together with the causes before it: the held-out RMS error of {axis} falls from {:.2} to {:.2} µm ({:.0} %), {:.0} % of what stayed above the probe noise, ΔBIC = {:.0}.",

@@ -12,8 +12,8 @@ use serde::Serialize;
 use super::candidates::{self, Baseline, Spec};
 use super::cause::Cause;
 use super::score::{self, HeldOut};
-use super::verdict::supported;
-use super::{Candidate, DiagnoseOptions, Holdout};
+use super::verdict::{nameable, supported, MAX_DELTA_BIC};
+use super::{Candidate, DiagnoseOptions, Fit, Holdout};
 use crate::error::{Error, Result};
 use crate::progress;
 use crate::thermal::calibrate::{Calibration, FreeParam};
@@ -123,6 +123,10 @@ pub struct Round {
     pub kept: bool,
     /// Candidates fitted in the round.
     pub candidates: usize,
+    /// Accepted as one of a pair ([`pair`]): this round's cause did not pass alone, and it was
+    /// fitted together with the next round's (the lead, its figures alone) or the previous
+    /// round's (the partner, its figures those of the pair against the model before both).
+    pub paired: bool,
 }
 
 /// The rounds' result.
@@ -188,7 +192,24 @@ fn round_entry(
     accepted: bool,
     noise: f64,
 ) -> Round {
-    let c = best.map(|i| &cands[i]);
+    entry(
+        round,
+        best.map(|i| &cands[i]),
+        cands.len(),
+        before,
+        accepted,
+        noise,
+    )
+}
+
+fn entry(
+    round: usize,
+    c: Option<&Candidate>,
+    n_cands: usize,
+    before: &Holdout,
+    accepted: bool,
+    noise: f64,
+) -> Round {
     Round {
         round,
         cause: c.map(|c| c.cause),
@@ -202,8 +223,141 @@ fn round_entry(
         excess_share: c.map_or(0.0, |c| excess_share(before, &c.holdout, noise)),
         accepted,
         kept: accepted,
-        candidates: cands.len(),
+        candidates: n_cands,
+        paired: false,
     }
+}
+
+/// Partners a pair's lead is fitted with: the best-scoring candidate of each other cause.
+pub const PAIR_PARTNERS: usize = Cause::ALL.len() - 1;
+
+/// Two causes that pass together where neither passes alone. With two effects hidden, the
+/// one whose extension improves the training fit most can make the held-out error worse on
+/// its own — it takes up the other effect too, and carries that into the held-out rows — so a
+/// round would stop with both unnamed. Its lead is the best-scoring fully fitted candidate with
+/// the training evidence ([`MAX_DELTA_BIC`]) that fails the round's rule (`ok`) and whose
+/// column may be named; it is fitted together with the best candidate of each other cause
+/// (from the lead's and the partner's fitted values). A pair is taken when the joint model
+/// passes the round's rule against the current model and, against each of the two alone,
+/// the later rounds' rule ([`passes`]): each member earns its place beside the other. The
+/// best such pair by score; `None` when there is none. The backward check then refits without
+/// each, as for every accepted cause.
+fn pair(
+    cx: &Context<'_, '_>,
+    b: &Baseline<'_>,
+    cands: &[Candidate],
+    taken: &[&Spec],
+    ok: &(dyn Fn(&Candidate) -> bool + Sync),
+) -> Result<Option<(usize, Candidate)>> {
+    let (noise, opts, axis_index) = (cx.noise, cx.opts, b.axis_index);
+    let Some(lead) = cands.iter().position(|c| {
+        c.fit == Fit::Full
+            && c.spec.is_some()
+            && c.delta_bic < MAX_DELTA_BIC
+            && c.score > 0.0
+            && nameable(c)
+            && !ok(c)
+    }) else {
+        return Ok(None);
+    };
+    let l = &cands[lead];
+    let Some(ls) = l.spec.as_ref() else {
+        return Ok(None);
+    };
+    let mut partners: Vec<usize> = Vec::new();
+    for (k, c) in cands.iter().enumerate() {
+        let fresh = partners.iter().all(|&q| cands[q].cause != c.cause);
+        if c.cause != l.cause
+            && fresh
+            && nameable(c)
+            && c.spec
+                .as_ref()
+                .is_some_and(|s| !candidates::overlaps(s, ls, axis_index))
+        {
+            partners.push(k);
+        }
+    }
+    partners.truncate(PAIR_PARTNERS);
+    crate::interrupt::check()?;
+    progress::plan(opts.progress.as_deref(), partners.len());
+    let fits = partners
+        .into_par_iter()
+        .map(|k| {
+            crate::interrupt::check()?;
+            let p = &cands[k];
+            let Some(ps) = p.spec.as_ref() else {
+                return Ok(None);
+            };
+            let chain: Vec<&Spec> = taken.iter().copied().chain([ls, ps]).collect();
+            let Some(spec) = candidates::rebuild(cx.nominal, &chain, axis_index, cx.train) else {
+                return Ok(None);
+            };
+            // the accepted extensions and the lead's from the lead's fit, the partner's from its own
+            let n = ls.extra.len().min(spec.extra.len());
+            let mut extra =
+                candidates::carry(&spec.extra[..n], &spec.machine, &l.calibration.machine);
+            extra.extend(candidates::carry(
+                &spec.extra[n..],
+                &spec.machine,
+                &p.calibration.machine,
+            ));
+            let j = candidates::fit(
+                Spec { extra, ..spec },
+                b,
+                cx.train,
+                cx.held,
+                Some(&l.calibration),
+            );
+            progress::step(opts.progress.as_deref());
+            let j = j?;
+            let each = passes(
+                &against(&j, &l.calibration, &l.holdout),
+                &l.holdout,
+                noise,
+                opts,
+            ) && passes(
+                &against(&j, &p.calibration, &p.holdout),
+                &p.holdout,
+                noise,
+                opts,
+            );
+            Ok((ok(&j) && each).then_some((lead, j)))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(fits
+        .into_iter()
+        .flatten()
+        .max_by(|a, b| a.1.score.total_cmp(&b.1.score)))
+}
+
+/// An accepted cause: its round, its candidate, its alternatives.
+type Taken = (usize, Candidate, Vec<Alternative>);
+
+/// The two entries of an accepted pair (rounds `r` and `r + 1`, the lead first) and their
+/// accepted causes: the lead with the pair's figures (the round that accepted it is the pair's),
+/// the partner as the pair's joint model, whose calibration is the current model.
+fn accept_pair(
+    r: usize,
+    cands: &[Candidate],
+    (lead, joint): (usize, Candidate),
+    before: &Holdout,
+    noise: f64,
+) -> ([Round; 2], [Taken; 2]) {
+    let l = &cands[lead];
+    let mut first = entry(r, Some(l), cands.len(), before, true, noise);
+    first.paired = true;
+    let mut second = entry(r + 1, Some(&joint), cands.len(), before, true, noise);
+    second.paired = true;
+    let mut a = joint.clone();
+    a.cause = l.cause;
+    a.column = l.column.clone();
+    a.node = l.node.clone();
+    a.sensor_gain_pct = l.sensor_gain_pct;
+    a.spec = l.spec.clone();
+    (
+        [first, second],
+        [(r, a, Vec::new()), (r + 1, joint, Vec::new())],
+    )
 }
 
 /// Runs rounds 2.. after round 1 (`cands1`, sorted by score, its named index `chosen1`), then
@@ -221,30 +375,43 @@ where
 {
     let (noise, opts, axis_index) = (cx.noise, cx.opts, base.axis_index);
     let best1 = cands1.iter().position(supported);
-    let mut rounds = vec![round_entry(
-        1,
-        cands1,
-        chosen1.or(best1),
-        base.holdout,
-        chosen1.is_some(),
-        noise,
-    )];
-    let Some(i) = chosen1 else {
-        return Ok(Outcome {
-            causes: Vec::new(),
-            dropped: Vec::new(),
-            rounds,
-            joint: None,
-        });
-    };
     // (round, candidate, its alternatives); the last one's calibration is the current model
     let first_rule = |c: &Candidate| supported(c) && c.score >= opts.min_score;
-    let mut accepted: Vec<(usize, Candidate, Vec<Alternative>)> = vec![(
-        1,
-        cands1[i].clone(),
-        alternatives(cands1, &cands1[i], first_rule),
-    )];
-    for r in 2..=MAX_ROUNDS {
+    let mut rounds = Vec::new();
+    let mut accepted: Vec<Taken> = Vec::new();
+    match chosen1 {
+        Some(i) => {
+            rounds.push(round_entry(1, cands1, Some(i), base.holdout, true, noise));
+            accepted.push((
+                1,
+                cands1[i].clone(),
+                alternatives(cands1, &cands1[i], first_rule),
+            ));
+        }
+        None => {
+            rounds.push(round_entry(1, cands1, best1, base.holdout, false, noise));
+            let found = if base.holdout.rmse_um / noise > opts.noise_ratio {
+                progress::stage(opts.progress.as_deref(), 2);
+                pair(cx, base, cands1, &[], &first_rule)?
+            } else {
+                None
+            };
+            let Some(found) = found else {
+                return Ok(Outcome {
+                    causes: Vec::new(),
+                    dropped: Vec::new(),
+                    rounds,
+                    joint: None,
+                });
+            };
+            let (entries, taken) = accept_pair(1, cands1, found, base.holdout, noise);
+            rounds.clear();
+            rounds.extend(entries);
+            accepted.extend(taken);
+        }
+    }
+    let mut r = accepted.len() + 1;
+    while r <= MAX_ROUNDS {
         let cur = &accepted[accepted.len() - 1].1;
         if cur.holdout.rmse_um / noise <= opts.noise_ratio {
             break; // only noise is left
@@ -268,14 +435,31 @@ where
         );
         let cands = fit_round(&spec.machine, &b, &carried, &taken)?;
         let best = cands.iter().position(supported);
-        let ok = best.is_some_and(|j| passes(&cands[j], &cur.holdout, noise, opts));
-        rounds.push(round_entry(r, &cands, best, &cur.holdout, ok, noise));
-        match best {
-            Some(j) if ok => {
-                let alt = alternatives(&cands, &cands[j], |c| passes(c, &cur.holdout, noise, opts));
-                accepted.push((r, cands[j].clone(), alt));
+        let rule = |c: &Candidate| passes(c, &cur.holdout, noise, opts);
+        let ok = best.is_some_and(|j| rule(&cands[j]));
+        if let (Some(j), true) = (best, ok) {
+            rounds.push(round_entry(r, &cands, best, &cur.holdout, true, noise));
+            let alt = alternatives(&cands, &cands[j], rule);
+            accepted.push((r, cands[j].clone(), alt));
+            r += 1;
+            continue;
+        }
+        let found = if r < MAX_ROUNDS {
+            pair(cx, &b, &cands, &taken, &rule)?
+        } else {
+            None
+        };
+        match found {
+            Some(found) => {
+                let (entries, two) = accept_pair(r, &cands, found, &cur.holdout, noise);
+                rounds.extend(entries);
+                accepted.extend(two);
+                r += 2;
             }
-            _ => break,
+            None => {
+                rounds.push(round_entry(r, &cands, best, &cur.holdout, false, noise));
+                break;
+            }
         }
     }
     // backward check: without each accepted cause in turn, does it still pass against the rest?

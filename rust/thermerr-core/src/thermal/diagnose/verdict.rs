@@ -65,7 +65,14 @@ pub fn supported(c: &Candidate) -> bool {
     c.delta_bic < MAX_DELTA_BIC
         && c.score > 0.0
         && (c.gain_pct > 0.0 || c.sensor_gain_pct.is_some_and(|g| g >= DRIFT_OWN_GAIN_PCT))
-        && c.mates.as_ref().is_none_or(|m| m.corroborate)
+        && nameable(c)
+}
+
+/// The conditions of [`supported`] on the candidate's column, whatever its figures: its part's
+/// other sensors do not contradict a sensor drift, a drift's own sensor is no worse held out,
+/// and a source's column is not another sensor on a part the network has.
+pub fn nameable(c: &Candidate) -> bool {
+    c.mates.as_ref().is_none_or(|m| m.corroborate)
         && c.sensor_gain_pct.is_none_or(|g| g > 0.0)
         && c.mate_of.is_none()
 }
