@@ -379,6 +379,8 @@ where
     let first_rule = |c: &Candidate| supported(c) && c.score >= opts.min_score;
     let mut rounds = Vec::new();
     let mut accepted: Vec<Taken> = Vec::new();
+    // the rounds whose accepted candidate is a pair's lead (its calibration is the pair's)
+    let mut pair_leads: Vec<usize> = Vec::new();
     match chosen1 {
         Some(i) => {
             rounds.push(round_entry(1, cands1, Some(i), base.holdout, true, noise));
@@ -404,6 +406,7 @@ where
                     joint: None,
                 });
             };
+            pair_leads.push(1);
             let (entries, taken) = accept_pair(1, cands1, found, base.holdout, noise);
             rounds.clear();
             rounds.extend(entries);
@@ -451,6 +454,7 @@ where
         };
         match found {
             Some(found) => {
+                pair_leads.push(r);
                 let (entries, two) = accept_pair(r, &cands, found, &cur.holdout, noise);
                 rounds.extend(entries);
                 accepted.extend(two);
@@ -463,6 +467,15 @@ where
         }
     }
     // backward check: without each accepted cause in turn, does it still pass against the rest?
+    // The models already fitted, by the rounds of the causes they hold: a refit without a cause
+    // starts from the joint model's values and can stop in a worse minimum than the round that
+    // fitted the same causes did, and a cause is not judged against a worse fit than one known.
+    let mut known: Vec<(Vec<usize>, Candidate)> = Vec::new();
+    for (i, (r, c, _)) in accepted.iter().enumerate() {
+        if !pair_leads.contains(r) {
+            known.push((accepted[..=i].iter().map(|a| a.0).collect(), c.clone()));
+        }
+    }
     let mut joint = accepted[accepted.len() - 1].1.clone();
     let mut dropped = Vec::new();
     while accepted.len() >= 2 {
@@ -492,7 +505,18 @@ where
                 );
                 let reduced = candidates::fit(Spec { extra, ..spec }, &b, cx.train, cx.held, None);
                 progress::step(opts.progress.as_deref());
-                let reduced = reduced?;
+                let mut reduced = reduced?;
+                let rest: Vec<usize> = accepted
+                    .iter()
+                    .enumerate()
+                    .filter(|&(k, _)| k != j)
+                    .map(|(_, a)| a.0)
+                    .collect();
+                if let Some((_, k)) = known.iter().find(|(rs, _)| *rs == rest) {
+                    if k.calibration.ssr < reduced.calibration.ssr {
+                        reduced = k.clone();
+                    }
+                }
                 let full = against(&joint, &reduced.calibration, &reduced.holdout);
                 Ok((j, full, reduced))
             })
