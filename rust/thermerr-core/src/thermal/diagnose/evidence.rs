@@ -251,11 +251,18 @@ pub fn rounds(
     min_score: f64,
 ) -> String {
     let mut out = String::new();
+    // a pair is two entries, its lead then its partner; two pairs may follow each other
+    let mut partner_next = false;
     for (k, r) in rounds.iter().enumerate() {
         let what = r
             .cause
             .map(|c| place(c, r.column.as_deref(), r.node.as_deref()));
         if r.paired {
+            let is_partner = partner_next;
+            partner_next = !partner_next;
+            if is_partner {
+                continue;
+            }
             // the lead speaks for the pair; the partner is the next entry
             if let (Some(what), Some(p)) = (what, rounds.get(k + 1).filter(|p| p.paired)) {
                 let partner = p.cause.map_or(String::new(), |c| {
@@ -501,6 +508,41 @@ mod tests {
             "{s}"
         );
         assert!(!s.contains("as well"), "{s}");
+    }
+
+    #[test]
+    fn two_pairs_in_a_row_are_said_as_two_pairs() {
+        let entry = |round: usize, cause: Cause| Round {
+            round,
+            cause: Some(cause),
+            column: None,
+            node: None,
+            rmse_before_um: 2.0,
+            rmse_um: 1.0,
+            gain_pct: 50.0,
+            score: 0.3,
+            delta_bic: -50.0,
+            excess_share: 0.7,
+            accepted: true,
+            kept: true,
+            candidates: 10,
+            paired: true,
+        };
+        let rs = [
+            entry(1, Cause::ThermalLag),
+            entry(2, Cause::SpeedGrowth),
+            entry(3, Cause::AmbientCoupling),
+            entry(4, Cause::NonlinearExpansion),
+        ];
+        let s = rounds(&rs, &[], 0.0, 0.05, "E_z", true, 0.1);
+        assert!(
+            s.contains("Rounds 1 and 2 take thermal_lag and speed_growth as a pair")
+                && s.contains(
+                    "Rounds 3 and 4 take ambient_coupling and nonlinear_expansion as a pair"
+                ),
+            "{s}"
+        );
+        assert!(!s.contains("Rounds 2 and 3"), "{s}");
     }
 
     #[test]
