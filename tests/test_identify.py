@@ -150,13 +150,14 @@ def test_a_duplicate_a_dead_sensor_and_a_second_room_reading_make_no_node():
     cols["T_dup"] = cols["T_front_bearing"].copy()
     cols["T_flat"] = np.full(len(cols["time_s"]), 21.5)
     cols["T_room2"] = cols["T_ambient"] + 0.03 * np.random.default_rng(0).normal(size=len(cols["time_s"]))
-    # the dead sensor is also pointed out as a suspect reading (the whole run one value)
-    with pytest.warns(SuspectReadingWarning, match="T_flat repeats one reading"):
+    # the dead sensor is also pointed out as a suspect reading (the whole run one value), and
+    # as one that fails it is left out before the rule of the 2 noise levels is reached
+    with pytest.warns(SuspectReadingWarning, match=r"T_flat reads one value \(21.5\) in every row"):
         m, s = Machine.identify(_run(cols, "extra.csv"))
     assert m.sensors == plain.sensors
     assert [(x["column"], x["of"], x["tau_s"]) for x in s["copies"]] == [("T_dup", "T_front_bearing", 0.0)]
     left = {x.split(":")[0]: x for x in s["spare"]}
-    assert "reading varies by 0.000 K" in left["T_flat"]
+    assert "reads one value in every row" in left["T_flat"]
     assert "rise over the ambient varies" in left["T_room2"]
     assert s["axes"][0]["holdout_rmse_um"] == pytest.approx(s0["axes"][0]["holdout_rmse_um"], rel=1e-9)
 
@@ -602,6 +603,28 @@ def test_a_sensor_that_fails_is_neither_the_room_nor_a_node():
     with pytest.warns(SuspectReadingWarning):
         _, s2 = Machine.identify(_run(broken, "broken.csv"), ambient="T_dead")
     assert s2["ambient"]["column"] == "T_dead" and "T_dead" not in {x.split(":")[0] for x in s2["spare"]}
+
+
+
+def test_a_sensor_dead_in_every_row_is_neither_the_room_nor_a_node():
+    """A thermocouple open for the whole run reads its rail value (-200 °C) in every row: no jump
+    shows it failing, and before it was the coldest reading, so identification took it for the
+    room (on the real 46-h run with ``T_t3`` so: "no temperature warms with any input", no file
+    at all). A column with one reading in every row (guard's ``constant``) is now left out as a
+    spare column, as a jumping one is, and the network is the one identified without it."""
+    c = syn.make_case("vmc", "none", 1, hours=HOURS, dt=DT_S)
+    cols = {("T_room" if k == "T_ambient" else k): np.array(v, dtype=float) for k, v in c.train.items()}
+    plain, s0 = Machine.identify(_run(cols, "plain.csv"))
+    broken = dict(cols, T_dead=np.full(len(cols["time_s"]), -200.0))
+    with pytest.warns(SuspectReadingWarning, match=r"T_dead reads one value \(-200\) in every row"):
+        m, s = Machine.identify(_run(broken, "broken.csv"))
+    assert s["ambient"]["column"] == "T_room", s["ambient"]
+    assert "T_dead" not in m.sensors and m.sensors == plain.sensors
+    left = {x.split(":")[0]: x for x in s["spare"]}
+    assert "reads one value in every row" in left["T_dead"] and "a sensor fault" in left["T_dead"]
+    assert s["axes"][0]["holdout_rmse_um"] == pytest.approx(s0["axes"][0]["holdout_rmse_um"], rel=1e-9)
+    kinds = {(x["column"], x["kind"]) for x in s["suspect_readings"]}
+    assert ("T_dead", "constant") in kinds, kinds
 
 
 LONG_INIT = textwrap.dedent("""\

@@ -662,8 +662,12 @@ pub const GAP_FLOOR_S: f64 = 600.0;
 
 /// What is done with a probe (an error axis) that jumps, as its suspect line says it.
 pub const FAILING_PROBE: &str = "Its readings from a jump away to a jump back (or to the end of the run) are neither fitted nor scored; mend the rows if the change is real";
+/// What is done with a probe that reads one value in every row ([`SuspectKind::Constant`]).
+pub const CONSTANT_PROBE: &str = "Its axis shows no drift at all: the model's figures on it are of nothing; mend the probe or leave the column out";
+/// What is done with a temperature that reads one value in every row ([`SuspectKind::Constant`]).
+pub const CONSTANT_TEMPERATURE: &str = "It carries no temperature to model: identification takes it for neither the room nor a node's sensor, and the diagnosis does not try it as a heat source (named in a machine file, it is used as read). Mend the sensor or leave the column out";
 /// What is done with a temperature that jumps ([`Suspect::fails`]), as its suspect line says it.
-pub const FAILING_TEMPERATURE: &str = "Identification takes it for neither the room nor a node's sensor, and the diagnosis does not try it as a heat source. Over its failing rows (from a jump away to a jump back, or to the end of the run): as a node's sensor it is not fitted; as the room or a boundary it is held at its last right reading, and the model is neither fitted nor scored there. Drop the column or mend the rows if the change is real";
+pub const FAILING_TEMPERATURE: &str = "Identification takes it for neither the room nor a node's sensor, and the diagnosis does not try it as a heat source. Over its failing rows (from a jump away to a jump back, or to the end of the run; a sensor that reads one value from the first row until it jumps, from the start): as a node's sensor it is not fitted; as the room or a boundary it is held at its last right reading, and the model is neither fitted nor scored there. Drop the column or mend the rows if the change is real";
 
 /// The rows (0-based, each the reading after the step) where `col` jumps: a step whose rate is
 /// more than [`JUMP_FACTOR`] times the column's 99th percentile of rates and [`JUMP_FLOOR`]
@@ -707,17 +711,44 @@ fn jump_rows_at(col: &[f64], time: &[f64], step: f64) -> Vec<usize> {
 /// or a transmitter stuck at its rail for a while fail from the jump out to the jump back, and
 /// an open thermocouple from its fall to the end; a spike that decays over a few readings ends
 /// when the column is about back, and a jump further towards the last right reading after that
-/// opens no stretch. Half-open row ranges, in order; empty for a column that never jumps.
+/// opens no stretch. A column that reads one value from its first row until its first jump
+/// and then varies, never near that value again (a sensor connected late, a thermocouple open
+/// until mended: [`dead_until`]), fails from the start to that jump. Half-open row ranges, in
+/// order; empty for a column that never jumps.
 pub fn failing_rows(col: &[f64], time: &[f64]) -> Vec<std::ops::Range<usize>> {
     if col.iter().any(|v| !v.is_finite()) {
         return Vec::new();
     }
-    failing_of(col, &jump_rows(col, time))
+    failing_of(col, time, &jump_rows(col, time))
+}
+
+/// Whether `col` reads one value from its first row to the jump at row `j` (0-based), for
+/// [`STUCK_FLOOR_S`] or longer, varies after it, and never comes back within half the jump of
+/// that value: a sensor connected late, or a thermocouple open until it was mended. (An open
+/// sensor that falls to its rail at `j` reads one value after the jump, not before it.)
+fn dead_until(col: &[f64], time: &[f64], j: usize) -> bool {
+    let first = col[0];
+    let half = 0.5 * (col[j] - col[j - 1]).abs();
+    j >= 2
+        && time[j - 1] - time[0] >= STUCK_FLOOR_S
+        && col[..j].iter().all(|&v| v == first)
+        && col[j..].iter().any(|&v| v != col[j])
+        && col[j..].iter().all(|&v| (v - first).abs() > half)
 }
 
 /// [`failing_rows`] from the column's jumps.
-fn failing_of(col: &[f64], jumps: &[usize]) -> Vec<std::ops::Range<usize>> {
+fn failing_of(col: &[f64], time: &[f64], jumps: &[usize]) -> Vec<std::ops::Range<usize>> {
     let mut out = Vec::new();
+    // a sensor dead from the first row (one reading, its rail value, for [`STUCK_FLOOR_S`] or
+    // longer) that comes alive at its first jump and never reads near that value again: its
+    // failing rows are the ones before the jump, and its later jumps are judged from there
+    let jumps = match jumps.first() {
+        Some(&j) if dead_until(col, time, j) => {
+            out.push(0..j);
+            &jumps[1..]
+        }
+        _ => jumps,
+    };
     // (row the failing stretch started, the last right reading)
     let mut open: Option<(usize, f64)> = None;
     // the right reading before the last stretch that closed: a jump further towards it (the
@@ -759,6 +790,10 @@ pub enum SuspectKind {
     /// A gap in the log ([`GAP_FACTOR`] median steps and [`GAP_FLOOR_S`] or longer): the logger
     /// stopped, and what the machine did meanwhile is not in the run. `column` is `time_s`.
     Gap,
+    /// One reading in every row of the run, [`STUCK_FLOOR_S`] or longer: a dead or disconnected
+    /// sensor (an open thermocouple at its rail from the start), a column that carries nothing
+    /// to model.
+    Constant,
 }
 
 /// Readings of a run that the run itself makes suspect. A run to be diagnosed or identified has
@@ -786,7 +821,18 @@ impl Suspect {
     /// room nor a node's sensor, the diagnosis does not try it as a heat source, and a node's
     /// sensor is not fitted on its [`failing_rows`] ([`FAILING_TEMPERATURE`]).
     pub fn fails(&self) -> bool {
-        self.kind == SuspectKind::Jump
+        matches!(self.kind, SuspectKind::Jump | SuspectKind::Constant)
+    }
+
+    /// What shows the column failing, in words: its jumps ([`Suspect::jumps`]), or "reads one
+    /// value in every row (166710 s)".
+    pub fn fault(&self) -> String {
+        match self.kind {
+            SuspectKind::Constant => {
+                format!("reads one value in every row ({:.0} s)", self.size)
+            }
+            _ => self.jumps(),
+        }
     }
 
     /// A jump's figures in words: "jumps by up to 60.000 K from one reading to the next (2
@@ -870,8 +916,24 @@ pub fn suspect_readings(
         }
         let (row, seconds) = longest_repeat(n, |i| col[i], |i| time[i]);
         // a temperature's repeat inside its failing rows (the rail value of an open sensor)
-        let failing = failing_of(col, &jumps).iter().any(|r| r.contains(&row));
-        if seconds >= STUCK_FLOOR_S {
+        let failing = failing_of(col, time, &jumps)
+            .iter()
+            .any(|r| r.contains(&row));
+        if row == 0 && seconds >= STUCK_FLOOR_S && seconds >= time[n - 1] - time[0] {
+            out.push(Suspect {
+                column: name.to_string(),
+                kind: SuspectKind::Constant,
+                row: 1,
+                count: 1,
+                size: seconds,
+                text: format!(
+                    "{source}: {name} reads one value ({}) in every row ({seconds:.0} s): a dead or disconnected {}? {}",
+                    col[0],
+                    if name.starts_with("E_") { "probe" } else { "sensor" },
+                    if name.starts_with("E_") { CONSTANT_PROBE } else { CONSTANT_TEMPERATURE },
+                ),
+            });
+        } else if seconds >= STUCK_FLOOR_S {
             out.push(Suspect {
                 column: name.to_string(),
                 kind: SuspectKind::Repeat,

@@ -497,3 +497,92 @@ fn a_failing_stretch_ends_only_when_the_column_is_back() {
     }
     assert_eq!(failing_rows(&y, &t), vec![700..960]);
 }
+
+#[test]
+fn a_sensor_dead_in_every_row_is_constant_and_fails() {
+    let (t, clean) = warming(960);
+    // an open thermocouple at its rail for the whole run
+    let y = vec![-200.0; 960];
+    let s = suspect_readings("run.csv", &["T_a"], &[&y], &t);
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!((s[0].kind, s[0].row), (SuspectKind::Constant, 1));
+    assert!(s[0].fails());
+    assert_eq!(s[0].size, 959.0 * 15.0);
+    assert!(
+        s[0].text
+            .starts_with("run.csv: T_a reads one value (-200) in every row (14385 s)"),
+        "{}",
+        s[0].text
+    );
+    assert_eq!(s[0].fault(), "reads one value in every row (14385 s)");
+    // it is not fitted row by row: nothing jumps, the column is used as read where named
+    assert!(failing_rows(&y, &t).is_empty());
+    // one reading different: a repeat (a steady room on a coarse logger), not a dead sensor
+    let mut y2 = y.clone();
+    y2[959] = -199.9;
+    let s = suspect_readings("run.csv", &["T_a"], &[&y2], &t);
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!(s[0].kind, SuspectKind::Repeat);
+    assert!(!s[0].fails());
+    // a short run (under the stuck floor) of one reading is not said
+    let y3 = vec![20.0; 100];
+    assert!(suspect_readings("run.csv", &["T_a"], &[&y3], &t[..100]).is_empty());
+    // a probe that never moves
+    let z = vec![0.0; 960];
+    let s = suspect_readings("run.csv", &["E_a"], &[&z], &t);
+    assert_eq!(s[0].kind, SuspectKind::Constant);
+    assert!(
+        s[0].text.contains("dead or disconnected probe"),
+        "{}",
+        s[0].text
+    );
+    let _ = clean;
+}
+
+#[test]
+fn a_sensor_dead_from_the_start_fails_until_it_comes_alive() {
+    let (t, clean) = warming(960);
+    // at its rail for the first 300 readings (4485 s), then connected
+    let mut y = clean.clone();
+    for v in &mut y[..300] {
+        *v = -200.0;
+    }
+    assert_eq!(failing_rows(&y, &t), vec![0..300]);
+    let s = suspect_readings("run.csv", &["T_a"], &[&y], &t);
+    assert_eq!((s[0].kind, s[0].row), (SuspectKind::Jump, 301));
+    assert!(s[0].fails());
+    assert_eq!((s[1].kind, s[1].row), (SuspectKind::Repeat, 1));
+    assert!(
+        s[1].text
+            .ends_with("inside the rows of its jump, not fitted"),
+        "{}",
+        s[1].text
+    );
+    // and a later spike is still its own stretch
+    y[700] += 60.0;
+    assert_eq!(failing_rows(&y, &t), vec![0..300, 700..701]);
+    // the other way round (right, then open at its rail to the end) is unchanged
+    let mut y = clean.clone();
+    for v in &mut y[300..] {
+        *v = -200.0;
+    }
+    assert_eq!(failing_rows(&y, &t), vec![300..960]);
+    // a steady start on a coarse logger (one reading for 45 min) then a spike that comes back:
+    // the start is right, the spike fails
+    let mut y: Vec<f64> = t
+        .iter()
+        .map(|&s| {
+            let warm = 5.0 * (1.0 - (-(s - 2700.0).max(0.0) / 3600.0).exp());
+            ((20.0 + warm) * 10.0).round() / 10.0
+        })
+        .collect();
+    assert!(y[..181].iter().all(|&v| v == 20.0) && y[190] > 20.0);
+    y[500] += 60.0;
+    assert_eq!(failing_rows(&y, &t), vec![500..501]);
+    // shorter than the stuck floor at the start: an ordinary jump, failing from it on
+    let mut y = clean.clone();
+    for v in &mut y[..100] {
+        *v = -200.0;
+    }
+    assert_eq!(failing_rows(&y, &t), vec![100..960]);
+}

@@ -817,7 +817,7 @@ fn failed_columns(
                 format!(
                     "{}: {}: a sensor fault, so neither the room nor a node's sensor, left out of the network (a spare column); drop or mend those rows to use it",
                     sp.column,
-                    sp.jumps()
+                    sp.fault()
                 ),
             )
         })

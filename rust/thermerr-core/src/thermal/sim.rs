@@ -219,8 +219,9 @@ fn ambient_series<'a>(mach: &Machine, run: &RunView<'a>) -> Result<std::borrow::
 
 /// A temperature column that drives the network (the room, a boundary node), with each
 /// stretch where the run shows its sensor failing ([`crate::guard::failing_rows`]: an open
-/// thermocouple at its rail, a spike) held at the last right reading before it: the model is
-/// driven across it as across a gap in the log. A column that never fails is borrowed as is.
+/// thermocouple at its rail, a spike) held at the last right reading before it (at the first
+/// one after it for a sensor dead from the first row): the model is driven across it as across
+/// a gap in the log. A column that never fails is borrowed as is.
 pub fn driving<'a>(run: &RunView<'a>, c: &str) -> Result<std::borrow::Cow<'a, [f64]>> {
     let col = run.col(c)?;
     let failing = run.failing(c)?;
@@ -229,9 +230,13 @@ pub fn driving<'a>(run: &RunView<'a>, c: &str) -> Result<std::borrow::Cow<'a, [f
     }
     let mut held = col.to_vec();
     for r in failing.iter().cloned() {
-        // a stretch starts at a jump, so never at row 0
-        let last = col[r.start.saturating_sub(1)];
-        held[r].fill(last);
+        // a stretch starts at a jump, or at row 0 for a sensor dead from the start: held at the
+        // first right reading after it there
+        let right = match r.start {
+            0 => col[r.end.min(col.len() - 1)],
+            s => col[s - 1],
+        };
+        held[r].fill(right);
     }
     Ok(std::borrow::Cow::Owned(held))
 }
@@ -395,6 +400,9 @@ pub fn simulate_nodes_on(
     for &i in &net.dyn_nodes {
         let node = &mach.nodes[i];
         let mut v = match &node.sensor {
+            // a sensor dead from the first row tells nothing of the node's start: the node
+            // starts as an unsensed one, at the room's first reading
+            Some(c) if run.failing(c)?.first().is_some_and(|r| r.start == 0) => amb[0],
             Some(c) => run.col(c)?[0] - node.sensor_offset_k,
             None => amb[0],
         };
