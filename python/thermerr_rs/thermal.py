@@ -70,7 +70,10 @@ class Machine:
         sources, link the nodes by response order, set values from each node's time constant and
         calibrate on the first ``train_fraction`` of the run. A temperature that a first-order lag
         (at most 30 min) of another one reproduces within 3 noise levels is a second sensor on
-        that part: a member of its node, not a node.
+        that part: a member of its node, not a node. A run with no ``U_*`` input column is
+        driven by the temperature that rises most over the ambient, as a boundary node linked to
+        the nodes that warm first with it (a note says so; the diagnosis on such a network is
+        weaker: docs/machine-model.md, "A run with no input column").
 
         ``axes``: the error columns to map (default every ``E_*`` column). Returns the machine
         and a summary: ``ambient`` (``column``, ``rule``, ``reason``), ``nodes`` (each with
@@ -250,7 +253,8 @@ class Diagnosis:
 
     def __str__(self) -> str:
         return (self._text() + _suspect_lines(self.report.get("suspect_readings", []))
-                + (_identified_line() if self.report.get("identified") else ""))
+                + (_identified_line((self.report.get("identification") or {}).get("driven_by"))
+                   if self.report.get("identified") else ""))
 
     @property
     def baseline_unique(self) -> bool:
@@ -295,10 +299,10 @@ def _warn_suspects(texts: Iterable[str]) -> None:
         warnings.warn(t, SuspectReadingWarning, stacklevel=3)
 
 
-def _identified_line() -> str:
-    from .report import IDENTIFIED_CAVEAT
+def _identified_line(driven_by: str | None = None) -> str:
+    from .report import identified_caveat
 
-    return f"\nnote: the network was identified from data (thermerr init), {IDENTIFIED_CAVEAT}"
+    return f"\nnote: the network was identified from data (thermerr init), {identified_caveat(driven_by)}"
 
 
 @contextmanager
@@ -419,6 +423,9 @@ class AxesDiagnosis:
             "extended_rmse_um": {a: d.report["extended"]["rmse_um"] for a, d in self.by_axis.items()},
             "reports": {a: f"{a}.report.json" for a in self.by_axis},
             "identified": any(d.report["identified"] for d in self.by_axis.values()),
+            # the run the network was identified from had no input column: the driving temperature
+            "driven_by": next((d.report["identification"].get("driven_by") for d in self.by_axis.values()
+                               if d.report.get("identification")), None),
             "suspect_readings": _unique_suspects(d.report.get("suspect_readings", []) for d in self.by_axis.values()),
         }
 
@@ -442,7 +449,7 @@ class AxesDiagnosis:
                      "better and holds out differently (see each axis's evidence); --network best or keep gives a "
                      "baseline with one solution")
         return (text + _suspect_lines(self.report["suspect_readings"])
-                + (_identified_line() if self.report["identified"] else ""))
+                + (_identified_line(self.report["driven_by"]) if self.report["identified"] else ""))
 
 
 def diagnose_axes(run: Run, machine: Machine, holdout: Run | None = None, *, axes: list[str] | None = None,

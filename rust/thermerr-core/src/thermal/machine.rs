@@ -150,6 +150,10 @@ pub struct Identified {
     pub train_rmse_um: BTreeMap<String, f64>,
     #[serde(default)]
     pub holdout_rmse_um: BTreeMap<String, f64>,
+    /// The run had no input column: the temperature column that drives the network (a boundary
+    /// node), on which a diagnosis is weaker (docs/machine-model.md).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub driven_by: Option<String>,
 }
 
 /// The `[start]` table: the start a calibration fitted along with the file's values, on the run
