@@ -666,6 +666,12 @@ def test_a_sensor_dead_in_every_row_is_neither_the_room_nor_a_node():
     assert s["axes"][0]["holdout_rmse_um"] == pytest.approx(s0["axes"][0]["holdout_rmse_um"], rel=1e-9)
     kinds = {(x["column"], x["kind"]) for x in s["suspect_readings"]}
     assert ("T_dead", "constant") in kinds, kinds
+    # a room named by convention that reads one value throughout is a climate-controlled room on
+    # a coarse logger as likely as a dead sensor: it stays the room (before this rule it was too)
+    still = dict(c.train, T_ambient=np.full(len(cols["time_s"]), 20.0))
+    with pytest.warns(SuspectReadingWarning, match="climate-controlled room"):
+        _, s3 = Machine.identify(_run(still, "lab.csv"))
+    assert s3["ambient"]["column"] == "T_ambient", s3["ambient"]
 
 
 LONG_INIT = textwrap.dedent("""\

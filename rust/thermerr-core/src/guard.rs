@@ -664,6 +664,8 @@ pub const GAP_FLOOR_S: f64 = 600.0;
 pub const FAILING_PROBE: &str = "Its readings from a jump away to a jump back (or to the end of the run) are neither fitted nor scored; mend the rows if the change is real";
 /// What is done with a probe that reads one value in every row ([`SuspectKind::Constant`]).
 pub const CONSTANT_PROBE: &str = "Its axis shows no drift at all: the model's figures on it are of nothing; mend the probe or leave the column out";
+/// What is done with the room's column (`T_ambient`) when it reads one value in every row.
+pub const CONSTANT_ROOM: &str = "Or a climate-controlled room on a coarse logger: named the room, it is used as read (a constant room)";
 /// What is done with a temperature that reads one value in every row ([`SuspectKind::Constant`]).
 pub const CONSTANT_TEMPERATURE: &str = "It carries no temperature to model: identification takes it for neither the room nor a node's sensor, and the diagnosis does not try it as a heat source (named in a machine file, it is used as read). Mend the sensor or leave the column out";
 /// What is done with a temperature that jumps ([`Suspect::fails`]), as its suspect line says it.
@@ -777,6 +779,27 @@ fn failing_of(col: &[f64], time: &[f64], jumps: &[usize]) -> Vec<std::ops::Range
     out
 }
 
+/// A probe's first right reading (not in `failing`) when it is further from zero than the probe
+/// moves over the whole run (its largest right reading less its smallest): an error measured
+/// from the run's start is about zero there, so this one is a raw reading (a capacitive probe's
+/// gap) and the error is taken from that reading.
+pub fn probe_offset(col: &[f64], failing: &[std::ops::Range<usize>]) -> Option<f64> {
+    let right = || {
+        col.iter()
+            .enumerate()
+            .filter(|(k, v)| v.is_finite() && !failing.iter().any(|r| r.contains(k)))
+            .map(|(_, v)| *v)
+    };
+    // the start is the first right reading, its noise and all: the mean of the first five
+    // readings, tried, took in the drift of the run's first minutes instead (2 µm on the
+    // simulated VMC at 120 s per reading, against 0.2 µm of noise)
+    let start = right().next()?;
+    let (lo, hi) = right().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+        (a.min(v), b.max(v))
+    });
+    (start.abs() > hi - lo).then_some(start)
+}
+
 /// What makes a reading suspect.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -794,6 +817,10 @@ pub enum SuspectKind {
     /// sensor (an open thermocouple at its rail from the start), a column that carries nothing
     /// to model.
     Constant,
+    /// A probe whose first reading is further from zero than it moves over the run
+    /// ([`probe_offset`]): a raw reading, not an error from the run's start. It is taken from
+    /// its first reading (`size`: that reading, µm).
+    Offset,
 }
 
 /// Readings of a run that the run itself makes suspect. A run to be diagnosed or identified has
@@ -930,7 +957,11 @@ pub fn suspect_readings(
                     "{source}: {name} reads one value ({}) in every row ({seconds:.0} s): a dead or disconnected {}? {}",
                     col[0],
                     if name.starts_with("E_") { "probe" } else { "sensor" },
-                    if name.starts_with("E_") { CONSTANT_PROBE } else { CONSTANT_TEMPERATURE },
+                    match *name {
+                        n if n.starts_with("E_") => CONSTANT_PROBE,
+                        "T_ambient" => CONSTANT_ROOM,
+                        _ => CONSTANT_TEMPERATURE,
+                    },
                 ),
             });
         } else if seconds >= STUCK_FLOOR_S {
@@ -951,6 +982,20 @@ pub fn suspect_readings(
                     }
                 ),
             });
+        }
+        if name.starts_with("E_") {
+            if let Some(v) = probe_offset(col, &failing_of(col, time, &jumps)) {
+                out.push(Suspect {
+                    column: name.to_string(),
+                    kind: SuspectKind::Offset,
+                    row: 1,
+                    count: 1,
+                    size: v,
+                    text: format!(
+                        "{source}: {name} reads {v:.3} µm at its first right reading, further from zero than it moves over the whole run: a raw reading (a probe's gap), not the error from the run's start that formats.md asks for? The error is taken from that reading ({name} - {v:.3})"
+                    ),
+                });
+            }
         }
     }
     out

@@ -586,3 +586,38 @@ fn a_sensor_dead_from_the_start_fails_until_it_comes_alive() {
     }
     assert_eq!(failing_rows(&y, &t), vec![100..960]);
 }
+
+#[test]
+fn a_probe_that_does_not_start_at_zero_is_taken_from_its_first_reading() {
+    let (t, y) = warming(960);
+    // a raw reading: 20 µm at the start, moving 5 µm over the run
+    let off = probe_offset(&y, &[]).expect("an offset");
+    let start = y[0];
+    assert_eq!(off, start);
+    let s = suspect_readings("run.csv", &["E_a"], &[&y], &t);
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!(
+        (s[0].kind, s[0].row, s[0].size),
+        (SuspectKind::Offset, 1, y[0])
+    );
+    assert!(!s[0].fails());
+    assert!(
+        s[0].text.starts_with("run.csv: E_a reads 20.0"),
+        "{}",
+        s[0].text
+    );
+    // a temperature is no probe: said nothing of
+    assert!(suspect_readings("run.csv", &["T_a"], &[&y], &t).is_empty());
+    // an error from the run's start (its first reading within its own movement) is left alone
+    let z: Vec<f64> = y.iter().map(|v| v - y[0] + 0.3).collect();
+    assert_eq!(probe_offset(&z, &[]), None);
+    assert!(suspect_readings("run.csv", &["E_a"], &[&z], &t).is_empty());
+    // the first right reading: a probe that fails over its first rows is judged after them
+    let mut w = z.clone();
+    for v in &mut w[..5] {
+        *v = 900.0;
+    }
+    let first_five = vec![std::ops::Range { start: 0, end: 5 }];
+    assert_eq!(probe_offset(&w, &first_five), None);
+    assert_eq!(probe_offset(&y, &first_five), Some(y[5]));
+}

@@ -292,7 +292,7 @@ fn fit_drift(
     sigma_e: f64,
     ridge: Option<f64>,
 ) -> Result<(Vec<f64>, Vec<f64>)> {
-    let measured = error.values;
+    let measured: &[f64] = &error.values;
     let (basis, mut prior) = drift_basis(m, d, run, temps)?;
     if basis.is_empty() {
         return Ok((Vec::new(), vec![0.0; measured.len()]));
@@ -426,7 +426,7 @@ fn kept_terms(
 ) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
     let (basis, _) = drift_basis(m, d, run, temps)?;
     let x = basis.iter().map(|b| error.kept(b, 0..rows)).collect();
-    Ok((x, error.kept(error.values, 0..rows)))
+    Ok((x, error.kept(&error.values, 0..rows)))
 }
 
 /// A drift map's node terms cancel when one term alone swings more than this many times the
@@ -605,7 +605,9 @@ pub fn store_drift(m: &mut Machine, d: usize, coef: &[f64]) {
 /// ([`crate::guard::failing_rows`]: from a jump away to a jump back, or to the end), which are neither
 /// fitted nor scored. No failing rows is the usual case, and then nothing changes.
 pub struct Reading<'a> {
-    pub values: &'a [f64],
+    /// The column; a probe (`E_*`) whose first reading is further from zero than it moves over
+    /// the whole run is taken from that reading ([`crate::guard::probe_offset`]).
+    pub values: std::borrow::Cow<'a, [f64]>,
     /// Half-open row ranges, in order.
     pub failing: Vec<std::ops::Range<usize>>,
 }
@@ -613,9 +615,18 @@ pub struct Reading<'a> {
 impl<'a> Reading<'a> {
     /// Column `name` of `run`, with its failing rows ([`RunView::failing`]).
     pub fn of(run: &RunView<'a>, name: &str) -> Result<Self> {
+        let col = run.col(name)?;
+        let failing = run.failing(name)?.to_vec();
+        let offset = match name.starts_with("E_") {
+            true => crate::guard::probe_offset(col, &failing),
+            false => None,
+        };
         Ok(Reading {
-            values: run.col(name)?,
-            failing: run.failing(name)?.to_vec(),
+            values: match offset {
+                Some(v) => std::borrow::Cow::Owned(col.iter().map(|x| x - v).collect()),
+                None => std::borrow::Cow::Borrowed(col),
+            },
+            failing,
         })
     }
 
@@ -652,7 +663,7 @@ impl<'a> Reading<'a> {
         if self.failing.is_empty() {
             return noise_level(&self.values[..rows]);
         }
-        noise_level(&self.kept(self.values, 0..rows))
+        noise_level(&self.kept(&self.values, 0..rows))
     }
 }
 
@@ -833,7 +844,7 @@ fn normalised(
     let mut r = Vec::with_capacity(rows * (tg.sensors.len() + 1));
     let nn = m.nodes.len();
     for sn in &tg.sensors {
-        let (i, meas) = (sn.node, sn.reading.values);
+        let (i, meas) = (sn.node, &*sn.reading.values);
         let node = &m.nodes[i];
         let (off, drift) = (node.sensor_offset_k, node.sensor_drift_k_per_h);
         let rows_of = temps.chunks_exact(nn).zip(meas).take(rows);
@@ -862,7 +873,7 @@ fn normalised(
             }));
         }
     }
-    let pairs = e.iter().zip(tg.error.values).take(rows);
+    let pairs = e.iter().zip(tg.error.values.iter()).take(rows);
     if tg.error.failing.is_empty() {
         r.extend(pairs.map(|(ek, mk)| (ek - mk) / sigma_e));
     } else {
@@ -1100,7 +1111,7 @@ pub fn fit_initial_offsets(m: &Machine, run: &RunView<'_>, window: usize) -> Res
     }
     let mut rhs = Vec::with_capacity(w * sensed.len());
     for sn in &sensed {
-        let (i, meas) = (sn.node, sn.reading.values);
+        let (i, meas) = (sn.node, &*sn.reading.values);
         let node: &NodeSpec = &m.nodes[i];
         for k in (0..w).filter(|&k| sn.reading.reads(k)) {
             let pred = base[k * nn + i]
@@ -1264,7 +1275,7 @@ mod tests {
         );
         assert_eq!(union(&[], &[4..6, 8..9]), vec![4..6, 8..9]);
         let r = Reading {
-            values: &[0.0; 40],
+            values: std::borrow::Cow::Borrowed(&[0.0; 40]),
             failing: vec![5..12, 20..30],
         };
         assert_eq!(r.fitted_rows(25), 25 - 7 - 5);

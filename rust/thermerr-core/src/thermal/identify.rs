@@ -806,7 +806,8 @@ fn choose_ambient(
 /// The temperatures the run shows failing ([`Suspect::fails`](crate::guard::Suspect::fails)):
 /// taken for neither the room nor a node's sensor (a dead sensor read as the coldest place would
 /// be chosen as the room, and every node's balance built on it). `given` (the ambient the user
-/// named) is kept whatever it shows; so are all the columns when fewer than two others would be
+/// named) is kept whatever it shows, and so is a `T_ambient` column that reads one value
+/// throughout (a climate-controlled room); so are all the columns when fewer than two others would be
 /// left. Returns (column, the spare-column line saying why).
 fn failed_columns(
     suspects: &[crate::guard::Suspect],
@@ -817,6 +818,9 @@ fn failed_columns(
         .iter()
         .filter(|sp| sp.fails())
         .filter(|sp| temps.contains(&sp.column.as_str()) && Some(sp.column.as_str()) != given)
+        // a room named by convention that reads one value throughout: a climate-controlled room
+        // on a coarse logger is a room all the same (a dead sensor so named would be one too)
+        .filter(|sp| !(sp.kind == crate::guard::SuspectKind::Constant && sp.column == "T_ambient"))
         .map(|sp| {
             (
                 sp.column.clone(),
@@ -1151,7 +1155,12 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             (0..ns).collect::<Vec<_>>(),
             vec![1.0; ns],
             ns,
-            format!("{k} nodes as asked, one per sensor"),
+            match opts.nodes {
+                Some(a) if a > k => {
+                    format!("{k} nodes, one per sensor ({a} asked: as many as pass the screening)")
+                }
+                _ => format!("{k} nodes as asked, one per sensor"),
+            },
         ),
         Some(1) => (
             vec![0; ns],
@@ -1517,7 +1526,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             fit(&node_rises, &e.values[..m])?
         } else {
             let rises: Vec<Vec<f64>> = node_rises.iter().map(|r| e.kept(r, 0..m)).collect();
-            fit(&rises, &e.kept(e.values, 0..m))?
+            fit(&rises, &e.kept(&e.values, 0..m))?
         };
         drift.push(DriftSpec {
             axis: ax.clone(),
@@ -1882,15 +1891,7 @@ fn names_of(col: &str) -> String {
 /// link also takes heat back as the node warms, which calibration then weighs).
 fn driven_by(m: &mut Machine, col: &str, top: f64) {
     let name = names_of(col);
-    m.nodes.push(NodeSpec {
-        name: name.clone(),
-        capacity_j_per_k: 1.0,
-        ambient_w_per_k: 0.0,
-        sensor: None,
-        boundary: Some(col.to_string()),
-        sensor_offset_k: 0.0,
-        sensor_drift_k_per_h: 0.0,
-    });
+    m.nodes.push(NodeSpec::boundary_on(name.clone(), col));
     for s in std::mem::take(&mut m.sources) {
         m.links.push(LinkSpec {
             between: [name.clone(), s.node],

@@ -55,6 +55,22 @@ pub struct NodeSpec {
     pub sensor_drift_k_per_h: f64,
 }
 
+impl NodeSpec {
+    /// A boundary node named `name` whose temperature is the column `col` (not simulated: its
+    /// capacity is never used, and it loses no heat to the room of its own).
+    pub fn boundary_on(name: String, col: &str) -> NodeSpec {
+        NodeSpec {
+            name,
+            capacity_j_per_k: 1.0,
+            ambient_w_per_k: 0.0,
+            sensor: None,
+            boundary: Some(col.to_string()),
+            sensor_offset_k: 0.0,
+            sensor_drift_k_per_h: 0.0,
+        }
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LinkSpec {

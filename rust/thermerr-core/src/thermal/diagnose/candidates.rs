@@ -164,15 +164,7 @@ pub(super) fn unmodeled_source(m: &Machine, free_cols: &[String]) -> Vec<Spec> {
         for node in m.nodes.iter().filter(|n| n.boundary.is_none()) {
             let mut src = m.clone();
             let name = format!("source_{}", col.trim_start_matches("T_"));
-            src.nodes.push(NodeSpec {
-                name: name.clone(),
-                capacity_j_per_k: 1.0,
-                ambient_w_per_k: 0.0,
-                sensor: None,
-                boundary: Some(col.clone()),
-                sensor_offset_k: 0.0,
-                sensor_drift_k_per_h: 0.0,
-            });
+            src.nodes.push(NodeSpec::boundary_on(name.clone(), col));
             src.links.push(LinkSpec {
                 between: [node.name.clone(), name],
                 w_per_k: 1.0,

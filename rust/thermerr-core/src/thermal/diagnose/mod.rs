@@ -804,6 +804,18 @@ fn diagnose_on(
             hold.map_or(train.source.as_str(), |h| h.source.as_str())
         )));
     }
+    let suspect_readings = suspects(train, hold, &axis);
+    // a probe that reads one value in every row of a run (dead, disconnected) has no drift to
+    // diagnose: "none" would be a verdict on nothing
+    if let Some(sp) = suspect_readings
+        .iter()
+        .find(|sp| sp.column == axis && sp.kind == crate::guard::SuspectKind::Constant)
+    {
+        return Err(Error::Shape(format!(
+            "{}: the probe does not move, nothing to diagnose; mend the probe, or diagnose the other axes alone (--axis, or axes= in Python)",
+            sp.text.split(": a dead or disconnected").next().unwrap_or(&sp.text)
+        )));
+    }
     let held = HeldOut {
         run: hold.unwrap_or(train),
         from: if hold.is_some() { 0 } else { split },
@@ -868,7 +880,6 @@ fn diagnose_on(
     );
     // extensions are built on the nominal machine, so that bounds and priors are the baseline's
     // (centred on the user's estimate); the search starts from the calibrated values
-    let suspect_readings = suspects(train, hold, &axis);
     let failed: Vec<String> = suspect_readings
         .iter()
         .filter(|sp| sp.fails() && sp.column.starts_with("T_"))

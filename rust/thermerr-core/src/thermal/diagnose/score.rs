@@ -49,7 +49,7 @@ pub(super) fn holdout(cal: &Calibration, held: &HeldOut<'_, '_>) -> Result<Holdo
     if from >= run.len() {
         return Err(Error::Shape("the held-out part is empty".into()));
     }
-    let y = tg.error.values;
+    let y: &[f64] = &tg.error.values;
     // a failing probe's rows are not scored
     let fig = match tg.error.failing.is_empty() {
         true => metrics::scores(&y[from..], &e[from..], None)?,
@@ -76,7 +76,7 @@ pub(super) fn holdout(cal: &Calibration, held: &HeldOut<'_, '_>) -> Result<Holdo
     let nn = m.nodes.len();
     let mut sensor_residuals = Vec::new();
     for sn in &tg.sensors {
-        let (i, meas_t) = (sn.node, sn.reading.values);
+        let (i, meas_t) = (sn.node, &*sn.reading.values);
         let node = &m.nodes[i];
         // a failing sensor's rows that are not fitted are not scored either: 0 there
         let res: Vec<f64> = (from..run.len())
