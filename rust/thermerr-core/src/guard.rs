@@ -843,12 +843,19 @@ pub struct Suspect {
 impl Suspect {
     /// Whether it shows the column failing: a jump (a step far faster than the column ever
     /// moves otherwise, and [`JUMP_FLOOR`] or more per step: an open thermocouple falling to its
-    /// rail value, a loose cable). A repeat is not: a logger's coarse resolution on a steady
-    /// temperature gives one too. Identification takes a failing temperature for neither the
+    /// rail value, a loose cable), or one reading in every row (a sensor dead throughout; not
+    /// `T_ambient`). A repeat is not: a logger's coarse resolution on a steady temperature gives
+    /// one too. Identification takes a failing temperature for neither the
     /// room nor a node's sensor, the diagnosis does not try it as a heat source, and a node's
     /// sensor is not fitted on its [`failing_rows`] ([`FAILING_TEMPERATURE`]).
     pub fn fails(&self) -> bool {
-        matches!(self.kind, SuspectKind::Jump | SuspectKind::Constant)
+        match self.kind {
+            SuspectKind::Jump => true,
+            // a room named by convention that reads one value throughout: a climate-controlled
+            // room on a coarse logger is a room all the same ([`CONSTANT_ROOM`])
+            SuspectKind::Constant => self.column != "T_ambient",
+            _ => false,
+        }
     }
 
     /// What shows the column failing, in words: its jumps ([`Suspect::jumps`]), or "reads one
@@ -920,6 +927,7 @@ pub fn suspect_readings(
             continue;
         }
         let jumps = jump_rows_at(col, time, step);
+        let failing = failing_of(col, time, &jumps);
         if let Some(&first) = jumps.first() {
             let count = jumps.len();
             let largest = jumps
@@ -943,9 +951,7 @@ pub fn suspect_readings(
         }
         let (row, seconds) = longest_repeat(n, |i| col[i], |i| time[i]);
         // a temperature's repeat inside its failing rows (the rail value of an open sensor)
-        let failing = failing_of(col, time, &jumps)
-            .iter()
-            .any(|r| r.contains(&row));
+        let in_failing = failing.iter().any(|r| r.contains(&row));
         if row == 0 && seconds >= STUCK_FLOOR_S && seconds >= time[n - 1] - time[0] {
             out.push(Suspect {
                 column: name.to_string(),
@@ -976,7 +982,7 @@ pub fn suspect_readings(
                     col[row],
                     seconds,
                     row + 1,
-                    match failing {
+                    match in_failing {
                         true => "inside the rows of its jump, not fitted",
                         false => "a stuck sensor, or a logger's coarse resolution on a steady temperature? The run is used as read",
                     }
@@ -984,7 +990,7 @@ pub fn suspect_readings(
             });
         }
         if name.starts_with("E_") {
-            if let Some(v) = probe_offset(col, &failing_of(col, time, &jumps)) {
+            if let Some(v) = probe_offset(col, &failing) {
                 out.push(Suspect {
                     column: name.to_string(),
                     kind: SuspectKind::Offset,

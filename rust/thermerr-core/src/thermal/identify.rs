@@ -806,8 +806,8 @@ fn choose_ambient(
 /// The temperatures the run shows failing ([`Suspect::fails`](crate::guard::Suspect::fails)):
 /// taken for neither the room nor a node's sensor (a dead sensor read as the coldest place would
 /// be chosen as the room, and every node's balance built on it). `given` (the ambient the user
-/// named) is kept whatever it shows, and so is a `T_ambient` column that reads one value
-/// throughout (a climate-controlled room); so are all the columns when fewer than two others would be
+/// named) is kept whatever it shows (a `T_ambient` that reads one value throughout does not fail
+/// at all: a climate-controlled room); so are all the columns when fewer than two others would be
 /// left. Returns (column, the spare-column line saying why).
 fn failed_columns(
     suspects: &[crate::guard::Suspect],
@@ -818,9 +818,6 @@ fn failed_columns(
         .iter()
         .filter(|sp| sp.fails())
         .filter(|sp| temps.contains(&sp.column.as_str()) && Some(sp.column.as_str()) != given)
-        // a room named by convention that reads one value throughout: a climate-controlled room
-        // on a coarse logger is a room all the same (a dead sensor so named would be one too)
-        .filter(|sp| !(sp.kind == crate::guard::SuspectKind::Constant && sp.column == "T_ambient"))
         .map(|sp| {
             (
                 sp.column.clone(),
