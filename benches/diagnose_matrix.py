@@ -16,6 +16,15 @@ held-out gain and the remainder; then a table per pair and the time per diagnosi
 
     python benches/diagnose_matrix.py --compound [--seeds 1-2] [--hours 10,5] [--dt 120]
 
+``--identified``: the rate sweep of tests/test_identify.py at any run length: each cause of
+:data:`SWEEP` (and none) hidden on both topologies, for each seed, diagnosed once with the
+network ``Machine.identify`` builds from the training run alone and once with the nominal TOML;
+per cell the cases named right (the cause, and its column where it has one) by each, every miss
+with its verdict, and the time of identification and of a diagnosis (``--hours 8,4 --dt 120`` by
+default, the test's sizes).
+
+    python benches/diagnose_matrix.py --identified [--seeds 1-2] [--hours 24,4] [--dt 60]
+
 ``--timing``: the time of one diagnosis of all five axes of the shop run
 (:func:`thermerr_rs.synthetic.make_shop_case`: 15-s samples, sixteen sensors, ambient coupling
 on E_ch3, speed growth on E_ch1) at each row count, with each axis's verdict.
@@ -135,22 +144,74 @@ def compound(seeds: range, hours: tuple[float, float], dt: float) -> None:
         print(f"time per diagnosis: mean {np.mean(times):.1f} s, max {max(times):.1f} s ({hours[0]:g} h + {hours[1]:g} h at {dt:g} s)")
 
 
+#: the causes of the identification's rate sweep (tests/test_identify.py), then none
+SWEEP = ("ambient_coupling", "unmodeled_source", "thermal_lag", "sensor_drift", "none")
+
+
+def named_right(c: syn.Case, d: tr.thermal.Diagnosis) -> bool:
+    """The hidden cause is the verdict, with its column where it has one."""
+    return d.verdict == c.hidden and (d.column == c.column or c.hidden not in ("sensor_drift", "unmodeled_source"))
+
+
+def identified(seeds: range, hours: tuple[float, float], dt: float) -> None:
+    totals = {"identified": 0, "nominal": 0}
+    n_cases = 0
+    t_id: list[float] = []
+    t_diag: list[float] = []
+    print(f"{'topology':<8} {'hidden':<18} {'identified':>10} {'nominal':>8}  misses (seed: verdict/column)")
+    for topo in ("vmc", "lathe"):
+        sub = {"identified": 0, "nominal": 0}
+        for h in SWEEP:
+            hits = {"identified": 0, "nominal": 0}
+            misses: list[str] = []
+            for seed in seeds:
+                c = syn.make_case(topo, h, seed, hours=hours, dt=dt)
+                train = tr.Run.from_frame(c.train, source="train")
+                test = tr.Run.from_frame(c.test, source="test")
+                t0 = time.perf_counter()
+                m_id, _ = Machine.identify(train)
+                t_id.append(time.perf_counter() - t0)
+                for which, m in (("identified", m_id), ("nominal", Machine.from_toml(c.nominal_toml()))):
+                    t0 = time.perf_counter()
+                    d = diagnose(train, m, test)
+                    t_diag.append(time.perf_counter() - t0)
+                    if named_right(c, d):
+                        hits[which] += 1
+                    else:
+                        misses.append(f"{which} {seed}: {d.verdict}" + (f"/{d.column}" if d.column else ""))
+                n_cases += 1
+            for k in hits:
+                sub[k] += hits[k]
+                totals[k] += hits[k]
+            a, b = f"{hits['identified']}/{len(seeds)}", f"{hits['nominal']}/{len(seeds)}"
+            print(f"{topo:<8} {h:<18} {a:>10} {b:>8}  " + "; ".join(misses), flush=True)
+        k = len(seeds) * len(SWEEP)
+        a, b = f"{sub['identified']}/{k}", f"{sub['nominal']}/{k}"
+        print(f"{topo:<8} {'all':<18} {a:>10} {b:>8}", flush=True)
+    print(f"\nnamed right: identified {totals['identified']}/{n_cases}, nominal {totals['nominal']}/{n_cases} "
+          f"({hours[0]:g} h + {hours[1]:g} h at {dt:g} s); identification mean {np.mean(t_id):.2f} s, "
+          f"diagnosis mean {np.mean(t_diag):.2f} s")
+
+
 def main() -> None:
     p = argparse.ArgumentParser()
     p.add_argument("--seeds", default="1-5")
     p.add_argument("--timing", action="store_true")
     p.add_argument("--rows", default="1000,10000,100000")
     p.add_argument("--compound", action="store_true")
-    p.add_argument("--hours", default="10,5", help="--compound: training and held-out hours")
-    p.add_argument("--dt", type=float, default=120.0, help="--compound: sampling step (s)")
+    p.add_argument("--identified", action="store_true")
+    p.add_argument("--hours", default=None,
+                   help="--compound, --identified: training and held-out hours (default 10,5 and 8,4)")
+    p.add_argument("--dt", type=float, default=120.0, help="--compound, --identified: sampling step (s)")
     args = p.parse_args()
     if args.timing:
         timing([int(v) for v in args.rows.split(",")])
         return
     a, b = (int(v) for v in args.seeds.split("-"))
-    if args.compound:
-        h_train, h_test = (float(v) for v in args.hours.split(","))
-        compound(range(a, b + 1), (h_train, h_test), args.dt)
+    if args.compound or args.identified:
+        hours = args.hours or ("10,5" if args.compound else "8,4")
+        h_train, h_test = (float(v) for v in hours.split(","))
+        (compound if args.compound else identified)(range(a, b + 1), (h_train, h_test), args.dt)
         return
     verdicts = ["thermal_lag", "ambient_coupling", "speed_growth", "unmodeled_source",
                 "nonlinear_expansion", "sensor_drift", "none", "unexplained"]
