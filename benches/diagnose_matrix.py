@@ -180,9 +180,9 @@ def identified(seeds: range, hours: tuple[float, float], dt: float) -> None:
                     else:
                         misses.append(f"{which} {seed}: {d.verdict}" + (f"/{d.column}" if d.column else ""))
                 n_cases += 1
-            for k in hits:
-                sub[k] += hits[k]
-                totals[k] += hits[k]
+            for which in hits:
+                sub[which] += hits[which]
+                totals[which] += hits[which]
             a, b = f"{hits['identified']}/{len(seeds)}", f"{hits['nominal']}/{len(seeds)}"
             print(f"{topo:<8} {h:<18} {a:>10} {b:>8}  " + "; ".join(misses), flush=True)
         k = len(seeds) * len(SWEEP)
