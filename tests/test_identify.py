@@ -4,8 +4,8 @@
 Rates at which the diagnosis names the hidden cause (and its column, where it has one), with the
 machine identified from the training run WITHOUT the nominal TOML, and with the nominal TOML of
 ``synthetic.make_case`` (perturbed true parameters). Runs of 8 h training / 4 h held out at 120-s
-sampling (the full-size runs are below), seeds 1 and 2, measured by ``test_rate_sweep`` (about
-10 s for the 40 diagnoses, so it runs by default):
+sampling, seeds 1 and 2, measured by ``test_rate_sweep`` (about 10 s for the 40 diagnoses, so it
+runs by default), and runs of 24 h / 4 h at 60 s by ``test_rate_sweep_long`` (about 35 s):
 
 =================  ==========  ==========================  ==========================
 topology           cause       identified (seeds 1, 2)     nominal TOML (seeds 1, 2)
@@ -13,39 +13,30 @@ topology           cause       identified (seeds 1, 2)     nominal TOML (seeds 1
 vmc                ambient     2/2                         2/2
 vmc                unmodeled   2/2                         2/2
 vmc                lag         2/2                         2/2
-vmc                drift       1/2 (seed 1: a source)      2/2
-vmc                none        1/2 (seed 1: ambient)       2/2
+vmc                drift       2/2                         2/2
+vmc                none        2/2                         2/2
 lathe              ambient     2/2                         2/2
-lathe              unmodeled   1/2 (seed 2: unexplained)   2/2
+lathe              unmodeled   1/2 (seed 2: T_cabinet)     2/2
 lathe              lag         2/2                         2/2
 lathe              drift       2/2                         2/2
 lathe              none        2/2                         2/2
-all                            17/20                       20/20
+all                            19/20                       20/20
 =================  ==========  ==========================  ==========================
 
-Measured 2026-11-26 after the simulation's step and the drift map's solve were rewritten for
-speed (the same equations, other roundings), and again after the candidates' BIC stop and the
-full fit's second search from its screen (the same counts; the VMC drift of seed 1, which the
-identified network misses, is now called an unmodelled source where it was ``unexplained``:
-its recalibration is not unique there, so the identified network is kept). Before that: 15/20 against 19/20 (VMC 8/10 against
-9/10, lathe 7/10 against 10/10); the rewrite moved a nominal VMC case (the ambient coupling,
-seed 1) to named and an identified lathe sensor drift (seed 1) to named, so the identified VMC is
-now two cases short of the nominal, as the lathe is. (It was 8/20 against 19/20 before
-identification calibrated from two starts, the heat balances' equation-error estimate and the
-rough one, and built the tree from both nodes' heat balances.) On the VMC the identified
-network absorbs a sensor drift of seed 1 that the nominal machine names (no rule — `auto`,
-`recalibrate`, `keep`, `best` — names it) and takes the room for an effect on seed 1 with
-nothing hidden. On the lathe its own fit is good, but the diagnosis scores on a separate run
-with another duty (random, not stepped), and there the identified network — fewer nodes, a tree
-found from one stepped run — can leave a structured residual (``unexplained``) or absorb the
-hidden effect (``none`` on the unmodelled source, seed 1) where the nominal machine names the
-cause. A spare column entering a node's heat balance (the hydraulic unit in the headstock's,
-``test_heat_from_a_spare_column_enters_the_balance_not_the_network``) then took the lathe's
-unmodelled source of seed 1 to named: 17/20, the lathe 9/10 against 10/10. ``test_rate_sweep``
-keeps the brief's bar (within one case of the nominal's count): met on the lathe, a strict xfail
-on the VMC, so it reports when identification gets there; it was not widened. Re-measured
-2026-11-27 after init fitted each drift map for a new run (ridge on the temperatures simulated
-from the first readings): the same cells, 17/20 against 20/20.
+Measured 2026-11-28 after identification added a node no sensor reads behind the slowest node
+(step 9 of docs/machine-model.md, "Starting from data": the VMC's bed, which the true machine
+has and no sensor reads). Before it, 17/20: the identified VMC 8/10 (it absorbed the sensor
+drift of seed 1, called an unmodelled source, and took the room for an effect where nothing
+is hidden, seed 1), a strict xfail here, and the lathe 9/10. With it the VMC is 10/10 and both
+machines are within the brief's bar (within one case of the nominal's count). Over seeds 1-4
+(``python benches/diagnose_matrix.py --identified --seeds 1-4``): 30/40 against 38/40 (29/40
+before the unsensed node). On the 24-h runs the unsensed node matters most: see
+``test_rate_sweep_long``.
+
+History: 8/20 before identification calibrated from two starts and built the tree from both
+nodes' heat balances; 15/20 before the simulation's step was rewritten (the same equations,
+other roundings); 16/20 before a spare column entered a node's heat balance; 17/20 from
+2026-11-26 to the unsensed node.
 """
 
 from __future__ import annotations
@@ -84,8 +75,8 @@ def _hit(case, d):
     return d.column == case.column if case.hidden in ("sensor_drift", "unmodeled_source") else True
 
 
-def _both(topology, hidden, seed):
-    c = syn.make_case(topology, hidden, seed, hours=HOURS, dt=DT_S)
+def _both(topology, hidden, seed, hours=HOURS, dt=DT_S):
+    c = syn.make_case(topology, hidden, seed, hours=hours, dt=dt)
     train, test = _run(c.train, "train.csv"), _run(c.test, "test.csv")
     ident, _ = Machine.identify(train)
     d_id = diagnose(train, ident, test)
@@ -93,16 +84,11 @@ def _both(topology, hidden, seed):
     return c, d_id, d_nom
 
 
-@pytest.mark.parametrize("topology", [
-    pytest.param("vmc", marks=pytest.mark.xfail(
-        strict=True, reason="measured 8/10 identified vs 10/10 nominal on the VMC (module docstring): not within one case")),
-    "lathe",
-])
-def test_rate_sweep(topology):
+def _sweep(topology, hours, dt):
     rates = {}
     for hidden in CAUSES:
         for seed in (1, 2):
-            c, d_id, d_nom = _both(topology, hidden, seed)
+            c, d_id, d_nom = _both(topology, hidden, seed, hours, dt)
             a, b = rates.get(hidden, (0, 0))
             rates[hidden] = (a + _hit(c, d_id), b + _hit(c, d_nom))
     print(topology, rates)
@@ -111,15 +97,34 @@ def test_rate_sweep(topology):
     assert total_id >= total_nom - MAX_SHORTFALL, rates
 
 
+@pytest.mark.parametrize("topology", ["vmc", "lathe"])
+def test_rate_sweep(topology):
+    _sweep(topology, HOURS, DT_S)
+
+
+@pytest.mark.parametrize("topology", ["vmc", "lathe"])
+def test_rate_sweep_long(topology):
+    """The sweep on 24-h training runs at 60 s (4 h held out): a longer run shows the slow parts.
+    Measured 2026-11-28, seeds 1-2: identified VMC 9/10 (a sensor drift of seed 1
+    ``unexplained``) and lathe 10/10, nominal 10/10 each. Without the unsensed node behind the
+    slowest node the identified VMC named 6/10 here (a sensor drift ``unexplained`` twice; with
+    nothing hidden an unmodelled source and a speed growth): the VMC's bed, which no sensor
+    reads, shows on a day-long run. Seeds 1-4 (the bench, ``--hours 24,4 --dt 60``): identified
+    38/40 against nominal 40/40 (31/40 before the unsensed node)."""
+    _sweep(topology, (24.0, 4.0), 60.0)
+
+
 def test_a_node_slower_than_the_training_rows_is_said_to_be_hardly_determined():
     """On the real 46-h run one node calibrates to 278 h on 32 h of training rows: the run shows
-    it warming, not where it settles. A 2-h VMC run (the column's time constant 2.2 h on 1.4 h
-    of training rows) gets the note; an 8-h run, whose slowest node takes about an hour, not."""
+    it warming, not where it settles. A 2-h VMC run (the unsensed node behind the column, 4.0 h
+    on 1.4 h of training rows; before that node, the column's 2.2 h) gets the note; an 8-h run,
+    whose slowest node (the unsensed one) takes 2.2 h, not."""
     def slow_notes(hours):
         c = syn.make_case("vmc", "none", 1, hours=(hours, 1.0), dt=60.0)
         m, s = Machine.identify(_run(c.train, "short.csv"))
         span = c.train["time_s"][s["train_rows"] - 1] - c.train["time_s"][0]
-        slow = [n["name"] for n in s["nodes"] if n["tau_s"] > span]
+        nodes = s["nodes"] + ([s["unsensed"]] if s["unsensed"] and s["unsensed"]["kept"] else [])
+        slow = [n["name"] for n in nodes if n["tau_s"] > span]
         return slow, [x for x in s["notes"] if x.startswith("calibrated time constant longer than")], s["toml"]
 
     slow, notes, toml = slow_notes(2.0)
@@ -234,7 +239,9 @@ def test_heat_from_a_spare_column_enters_the_balance_not_the_network(seed):
 def test_fixed_node_count_and_clusters_listed():
     c = syn.make_case("vmc", "none", 1, hours=HOURS, dt=DT_S)
     m, s = Machine.identify(_run(c.train, "run.csv"), nodes=2)
-    assert len(m.nodes) == 2 and s["n_nodes"] == 2
+    # the count asked is of the clustered nodes; the unsensed node behind the slowest comes on top
+    assert s["n_nodes"] == 2 and s["unsensed"]["kept"]
+    assert m.nodes == [n["name"] for n in s["nodes"]] + [s["unsensed"]["name"]]
     members = [x for n in s["nodes"] for x in n["members"]]
     assert sorted(members) == sorted(["T_front_bearing", "T_spindle_motor", "T_headstock", "T_column"])
     for n in s["nodes"]:

@@ -512,6 +512,10 @@ def cmd_init(args: argparse.Namespace) -> int:
         heat = f"; heated by {', '.join(nd['heated_by'])}" if nd["heated_by"] else ""
         _say(args, f"  {nd['name']:<20} sensor {nd['sensor']}, time constant {nd['tau_s']:.0f} s "
                    f"(first-order fit {nd['tau_fit_s']:.0f} s){heat}{others}")
+    u = s.get("unsensed")
+    if u and u["kept"]:
+        _say(args, f"  {u['name']:<20} no sensor: a part behind {u['linked_to']} (the slowest node), "
+                   f"time constant {u['tau_s']:.0f} s")
     if s["copies"]:
         _say(args, "second sensors on a part (lagged copies of a node's sensor, not nodes): " + ", ".join(
             f"{c['column']} ~ {c['of']} (lag {c['tau_s']:.0f} s)" for c in s["copies"]))

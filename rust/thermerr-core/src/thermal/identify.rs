@@ -65,6 +65,16 @@
 //!    factor 10 and a prior of a factor 10 as one σ, since a start is a guess) and the better
 //!    training fit is kept: each ends 2-300x worse than the other on some synthetic run. Every
 //!    further axis keeps the network and refits only its drift map.
+//!    **A part no sensor reads.** Then a node with no sensor (a bed, a base) is linked behind
+//!    the calibrated network's slowest node ([`UNSENSED_CAPACITY`] times its capacity, its
+//!    ambient conductance to the room and as the link, no drift term) and the whole network is
+//!    calibrated again from there. It is kept when the training fit's BIC falls (its three
+//!    values pay for themselves) and its calibrated time constant is no longer than the
+//!    training rows (the run shows it settle; a longer one cannot be told from a part held at
+//!    its start). Clustering makes one node per group of sensors, so without it the sensed
+//!    nodes read the heat they lose into such a part as their own capacities and losses; on the
+//!    synthetic VMC, whose bed no sensor reads, the diagnosis then named false causes on
+//!    day-long runs (measured in `tests/test_identify.py`).
 //! 7. **Drift maps for a new run.** A run is simulated from its sensors' first readings, so
 //!    every axis's map is fitted last to the temperatures the rounded network simulates from
 //!    there, by ridge regression with its penalty chosen on blocked folds of the training rows
@@ -243,6 +253,8 @@ pub struct Identification {
     pub suspect_readings: Vec<crate::guard::Suspect>,
     pub calibration_iterations: usize,
     pub calibration_converged: bool,
+    /// The unsensed node tried behind the slowest node (step 7b), kept or not.
+    pub unsensed: Option<UnsensedMass>,
 }
 
 /// First-order lag with the inputs held over each step: y⁺ = a·y + (1 − a)·p, a = e^{−h/τ}.
@@ -1643,6 +1655,14 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         );
     }
     let cal = cals.into_iter().nth(best).expect("the best start");
+    // 7b. a part no sensor reads, behind the slowest node (module docs, step 7)
+    let (cal, tried) = with_unsensed_mass(cal, &view, &cal_opts, (t[m - 1] - t[0]).max(60.0))?;
+    let mut unsensed = None;
+    if let Some((info, note, link)) = tried {
+        notes.push(note);
+        link_notes.extend(link);
+        unsensed = Some(info);
+    }
     let mut machine = cal.machine.clone();
     // every further axis: its drift map by least squares on the very node temperatures the
     // file will simulate (the calibrated network from the first axis's initial state). A
@@ -1831,10 +1851,29 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     }
     // a node slower than the training rows last: they show it warming, not how far it goes
     let span = run.time_s[m - 1] - run.time_s[0];
+    if let Some(u) = unsensed.as_mut().filter(|u| u.kept) {
+        if let Some(nd) = machine.nodes.iter().find(|nd| nd.name == u.name) {
+            let g = nd.ambient_w_per_k
+                + machine
+                    .links
+                    .iter()
+                    .filter(|l| l.between.contains(&nd.name))
+                    .map(|l| l.w_per_k)
+                    .sum::<f64>();
+            u.tau_s = nd.capacity_j_per_k / g.max(1e-12);
+        }
+    }
     let slow: Vec<String> = infos
         .iter()
-        .filter(|i| i.tau_s > span)
-        .map(|i| format!("{} ({})", i.name, fmt_s(i.tau_s)))
+        .map(|i| (&i.name, i.tau_s))
+        .chain(
+            unsensed
+                .iter()
+                .filter(|u| u.kept)
+                .map(|u| (&u.name, u.tau_s)),
+        )
+        .filter(|(_, tau)| *tau > span)
+        .map(|(name, tau)| format!("{name} ({})", fmt_s(tau)))
         .collect();
     if !slow.is_empty() {
         notes.push(format!(
@@ -1865,6 +1904,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         calibration_iterations: cal.n_iter,
         suspect_readings,
         calibration_converged: cal.converged,
+        unsensed,
     };
     id.toml = commented_toml(&id)?;
     // the text must load back to the very machine judged above
@@ -1875,6 +1915,127 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         ));
     }
     Ok(id)
+}
+
+/// Node `i`'s own time constant: C / (G_ambient + Σ its links).
+fn node_tau(m: &Machine, i: usize) -> f64 {
+    let nd = &m.nodes[i];
+    let g = nd.ambient_w_per_k
+        + m.links
+            .iter()
+            .filter(|l| l.between.contains(&nd.name))
+            .map(|l| l.w_per_k)
+            .sum::<f64>();
+    nd.capacity_j_per_k / g.max(1e-12)
+}
+
+/// The capacity of the unsensed mass's start, in capacities of the node it sits behind.
+pub const UNSENSED_CAPACITY: f64 = 3.0;
+
+/// The part of the machine no sensor reads (step 7b): its name, the node it is linked to, its
+/// calibrated time constant, and the normalised training SSR without and with it.
+#[derive(Clone, Debug, Serialize)]
+pub struct UnsensedMass {
+    pub name: String,
+    pub linked_to: String,
+    /// Kept in the network: it lowered the training fit's BIC.
+    pub kept: bool,
+    pub ssr_without: f64,
+    pub ssr_with: f64,
+    /// C / (G_ambient + link), calibrated (kept only when the training rows last longer).
+    pub tau_s: f64,
+}
+
+/// The calibrated network `cal` with an unsensed node behind its slowest simulated node (the
+/// largest C / (G_ambient + links)): a capacity of [`UNSENSED_CAPACITY`] times that node's,
+/// that node's ambient conductance to the room and as its link, no drift term, calibrated from
+/// there with the rest (`opts`); kept when the training fit's BIC falls (its normalised SSR by
+/// more than 3·ln n, n the fitted residuals: its three values pay for themselves). With the note to say,
+/// the link's note when kept, and what was tried (None: no simulated node to link it to).
+fn with_unsensed_mass(
+    cal: Calibration,
+    view: &RunView<'_>,
+    opts: &CalibrationOptions,
+    span: f64,
+) -> Result<(Calibration, Option<(UnsensedMass, String, Option<String>)>)> {
+    let m0 = &cal.machine;
+    let tau = |i: usize| node_tau(m0, i);
+    let Some(slow) = (0..m0.nodes.len())
+        .filter(|&i| m0.nodes[i].boundary.is_none())
+        .max_by(|&a, &b| tau(a).total_cmp(&tau(b)))
+    else {
+        return Ok((cal, None));
+    };
+    let of = m0.nodes[slow].clone();
+    let mut name = "unsensed".to_string();
+    while m0.node_index(&name).is_some() {
+        name.push('_');
+    }
+    let mut with = m0.clone();
+    with.nodes.push(NodeSpec {
+        name: name.clone(),
+        capacity_j_per_k: sig4(UNSENSED_CAPACITY * of.capacity_j_per_k),
+        ambient_w_per_k: sig4(of.ambient_w_per_k),
+        sensor: None,
+        boundary: None,
+        sensor_offset_k: 0.0,
+        sensor_drift_k_per_h: 0.0,
+    });
+    with.links.push(LinkSpec {
+        between: [of.name.clone(), name.clone()],
+        w_per_k: sig4(of.ambient_w_per_k),
+    });
+    let c = calibrate(&with, view, opts, None)?;
+    // its three values must pay for themselves: the fit's BIC (normalised SSR + k·ln n) falls;
+    // and the run must show it settle: a time constant longer than the training rows cannot be
+    // told from a part held at its start (on a real 46-h run: 49 000 h, a second room at the
+    // first reading, which the diagnosis paid for with 1.7x its time and no better verdicts)
+    let tau_mass = node_tau(&c.machine, c.machine.nodes.len() - 1);
+    let kept = c.ssr + 3.0 * portable::ln(c.n_data.max(1) as f64) < cal.ssr && tau_mass <= span;
+    let info = UnsensedMass {
+        name: name.clone(),
+        linked_to: of.name.clone(),
+        kept,
+        ssr_without: cal.ssr,
+        ssr_with: c.ssr,
+        tau_s: tau_mass,
+    };
+    if !kept {
+        let note = format!(
+            "an unsensed node behind {} (the slowest) was tried and not kept: {}",
+            of.name,
+            if tau_mass > span {
+                format!(
+                    "its calibrated time constant ({}) is longer than the training rows last \
+                     ({}), so the run cannot tell it from a part held at its start",
+                    fmt_s(tau_mass),
+                    fmt_s(span)
+                )
+            } else {
+                format!(
+                    "the training fit did not improve by more than its three values cost \
+                     (BIC: normalised SSR {:.4e} with it, {:.4e} without)",
+                    c.ssr, cal.ssr
+                )
+            }
+        );
+        return Ok((cal, Some((info, note, None))));
+    }
+    let note = format!(
+        "{name}: a node no sensor reads (a bed, a table, a base), linked to {} (the slowest \
+         node) and to the room, with no drift term of its own: the sensed parts lose heat into \
+         the mass behind them, which a network of sensed nodes alone reads as their own \
+         capacities and losses; it lowers the normalised training SSR from {:.4e} to {:.4e} \
+         (more than its three values cost in BIC). \
+         It starts at the room's first reading, as every unsensed node does (formats.md)",
+        of.name, cal.ssr, c.ssr
+    );
+    let link = format!(
+        "{} - {name}: the unsensed node behind the slowest node (a start of its ambient \
+         conductance, calibrated)",
+        of.name
+    );
+    Ok((c, Some((info, note, Some(link)))))
 }
 
 /// A node's name: its sensor's column without `T_`.
@@ -2087,6 +2248,22 @@ fn commented_toml(id: &Identification) -> Result<String> {
         line(&format!("capacity_j_per_k = {}", num(nd.capacity_j_per_k)));
         line(&format!("ambient_w_per_k = {}", num(nd.ambient_w_per_k)));
         line(&format!("boundary = {}", q(b)));
+    }
+    // the unsensed node behind the slowest node (step 7b), last
+    for nd in m.nodes.iter().skip(id.nodes.len()) {
+        if nd.boundary.is_some() || nd.sensor.is_some() {
+            continue;
+        }
+        let linked = id.unsensed.as_ref().map_or("", |u| u.linked_to.as_str());
+        line("");
+        line(&format!(
+            "# {}: a part no sensor reads, behind {linked} (the slowest node), linked to it and the room; no drift term; starts at the room's first reading",
+            nd.name
+        ));
+        line("[[nodes]]");
+        line(&format!("name = {}", q(&nd.name)));
+        line(&format!("capacity_j_per_k = {}", num(nd.capacity_j_per_k)));
+        line(&format!("ambient_w_per_k = {}", num(nd.ambient_w_per_k)));
     }
     if !m.links.is_empty() {
         line("");
