@@ -1917,6 +1917,9 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     Ok(id)
 }
 
+/// What step 7b tried: the node, the note to say, and the link's note when kept.
+type UnsensedTried = (UnsensedMass, String, Option<String>);
+
 /// Node `i`'s own time constant: C / (G_ambient + Σ its links).
 fn node_tau(m: &Machine, i: usize) -> f64 {
     let nd = &m.nodes[i];
@@ -1957,7 +1960,7 @@ fn with_unsensed_mass(
     view: &RunView<'_>,
     opts: &CalibrationOptions,
     span: f64,
-) -> Result<(Calibration, Option<(UnsensedMass, String, Option<String>)>)> {
+) -> Result<(Calibration, Option<UnsensedTried>)> {
     let m0 = &cal.machine;
     let tau = |i: usize| node_tau(m0, i);
     let Some(slow) = (0..m0.nodes.len())
