@@ -67,8 +67,8 @@ def test_auto_is_the_default_and_recalibrates_a_written_network(case):
     assert (r.verdict, r.report["baseline"], r.report["extended"]) == (d.verdict, d.report["baseline"], d.report["extended"])
 
 
-def _identified_case(topology, hidden, seed):
-    c = syn.make_case(topology, hidden, seed, hours=(8.0, 4.0), dt=120.0)
+def _identified_case(topology, hidden, seed, dt=120.0):
+    c = syn.make_case(topology, hidden, seed, hours=(8.0, 4.0), dt=dt)
     train, test = tr.Run.from_frame(c.train, source="train.csv"), tr.Run.from_frame(c.test, source="test.csv")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -77,17 +77,19 @@ def _identified_case(topology, hidden, seed):
 
 
 def test_auto_keeps_an_identified_network_whose_recalibration_is_not_unique():
-    """The identified VMC of the rate sweep's sizes, a thermal lag hidden (seed 3): from the
-    second start the recalibration fits the training rows as well (SSR 0.998x) and holds out
-    1.65 µm against 1.38 µm (measured 2026-11-28, after identification added the unsensed node
-    behind the slowest node; before, the sensor drift of seed 1 was such a case, and before
-    that the lathe's lag of seed 2: both now recalibrate to one solution). `auto` keeps the
-    identified network, says why, and its baseline and verdict are the ones `keep` gives."""
-    train, ident, test = _identified_case("vmc", "thermal_lag", 3)
+    """The identified VMC, a sensor drift hidden (seed 1), 8 h at 60 s: from the second start the
+    recalibration fits the training rows as well (SSR 1.03x, within the rule's 5 % tie,
+    ``TRAINING_TIE``) and holds out 0.88 µm against 1.44 µm (measured 2026-11-28, after
+    identification added the unsensed node behind the slowest node; before, the rate sweep's
+    sensor drift of seed 1 at 120 s was such a case, and before that the lathe's lag of seed 2:
+    both now recalibrate to one solution, as every case of the 8-h sweep at 120 s, seeds 1-4,
+    does). `auto` keeps the identified network, says why, and its baseline and verdict are the
+    ones `keep` gives."""
+    train, ident, test = _identified_case("vmc", "sensor_drift", 1, dt=60.0)
     d = diagnose(train, ident, test, progress=False)
     bn = d.report["baseline_network"]
     assert (bn["rule"], bn["network"], bn["second_start"]["unique"]) == ("auto", "kept", False)
-    assert bn["second_start"]["training_ssr_ratio"] <= 1.0
+    assert bn["second_start"]["training_ssr_ratio"] <= 1.05  # TRAINING_TIE: a tie
     assert "so the baseline keeps the identified network (rule `auto`" in d.evidence
     assert not bn["second_start"]["taken"]  # within the tie: the file's start is the recalibration
     assert bn["second_start"]["first_rmse_um"] == bn["recalibrated_rmse_um"]
