@@ -253,7 +253,7 @@ pub struct Identification {
     pub suspect_readings: Vec<crate::guard::Suspect>,
     pub calibration_iterations: usize,
     pub calibration_converged: bool,
-    /// The unsensed node tried behind the slowest node (step 7b), kept or not.
+    /// The unsensed node tried behind the slowest node (module docs, step 6), kept or not.
     pub unsensed: Option<UnsensedMass>,
 }
 
@@ -1655,7 +1655,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         );
     }
     let cal = cals.into_iter().nth(best).expect("the best start");
-    // 7b. a part no sensor reads, behind the slowest node (module docs, step 7)
+    // 7b. a part no sensor reads, behind the slowest node (module docs, step 6)
     let (cal, tried) = with_unsensed_mass(cal, &view, &cal_opts, (t[m - 1] - t[0]).max(60.0))?;
     let mut unsensed = None;
     if let Some((info, note, link)) = tried {
@@ -1825,14 +1825,6 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     });
     let mut infos = Vec::new();
     for i in 0..nn {
-        let nd = &machine.nodes[i];
-        let g: f64 = nd.ambient_w_per_k
-            + machine
-                .links
-                .iter()
-                .filter(|l| l.between.contains(&nd.name))
-                .map(|l| l.w_per_k)
-                .sum::<f64>();
         infos.push(NodeInfo {
             name: names[i].clone(),
             sensor: sensors[reps[i]].to_string(),
@@ -1845,22 +1837,16 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             membership: own[reps[i]],
             tau_fit_s: fos[i].tau,
             r2: fos[i].r2,
-            tau_s: nd.capacity_j_per_k / g.max(1e-12),
+            tau_s: node_tau(&machine, i),
             heated_by: heated_by[i].clone(),
         });
     }
     // a node slower than the training rows last: they show it warming, not how far it goes
     let span = run.time_s[m - 1] - run.time_s[0];
+    // the kept unsensed node's time constant, of the rounded file
     if let Some(u) = unsensed.as_mut().filter(|u| u.kept) {
-        if let Some(nd) = machine.nodes.iter().find(|nd| nd.name == u.name) {
-            let g = nd.ambient_w_per_k
-                + machine
-                    .links
-                    .iter()
-                    .filter(|l| l.between.contains(&nd.name))
-                    .map(|l| l.w_per_k)
-                    .sum::<f64>();
-            u.tau_s = nd.capacity_j_per_k / g.max(1e-12);
+        if let Some(i) = machine.node_index(&u.name) {
+            u.tau_s = node_tau(&machine, i);
         }
     }
     let slow: Vec<String> = infos
@@ -1917,7 +1903,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     Ok(id)
 }
 
-/// What step 7b tried: the node, the note to say, and the link's note when kept.
+/// What the unsensed node's step tried: the node, the note to say, and the link's note when kept.
 type UnsensedTried = (UnsensedMass, String, Option<String>);
 
 /// Node `i`'s own time constant: C / (G_ambient + Σ its links).
@@ -1935,7 +1921,7 @@ fn node_tau(m: &Machine, i: usize) -> f64 {
 /// The capacity of the unsensed mass's start, in capacities of the node it sits behind.
 pub const UNSENSED_CAPACITY: f64 = 3.0;
 
-/// The part of the machine no sensor reads (step 7b): its name, the node it is linked to, its
+/// The part of the machine no sensor reads (module docs, step 6): its name, the node it is linked to, its
 /// calibrated time constant, and the normalised training SSR without and with it.
 #[derive(Clone, Debug, Serialize)]
 pub struct UnsensedMass {
@@ -2238,35 +2224,28 @@ fn commented_toml(id: &Identification) -> Result<String> {
             line(&format!("sensor = {}", q(s)));
         }
     }
-    // the driving temperature of a run with no input column (after the clustered nodes)
+    // after the clustered nodes: the driving temperature of a run with no input column, then
+    // the unsensed node behind the slowest node (module docs, step 6)
     for nd in m.nodes.iter().skip(id.nodes.len()) {
-        let Some(b) = &nd.boundary else { continue };
         line("");
-        line(&format!(
-            "# {}: the run has no input column; {b}, the temperature that rises most over the ambient, drives the network (a boundary node: its temperature is the column, not simulated)",
-            nd.name
-        ));
+        line(&match &nd.boundary {
+            Some(b) => format!(
+                "# {}: the run has no input column; {b}, the temperature that rises most over the ambient, drives the network (a boundary node: its temperature is the column, not simulated)",
+                nd.name
+            ),
+            None => format!(
+                "# {}: a part no sensor reads, behind {} (the slowest node), linked to it and the room; no drift term; starts at the room's first reading",
+                nd.name,
+                id.unsensed.as_ref().map_or("", |u| u.linked_to.as_str())
+            ),
+        });
         line("[[nodes]]");
         line(&format!("name = {}", q(&nd.name)));
         line(&format!("capacity_j_per_k = {}", num(nd.capacity_j_per_k)));
         line(&format!("ambient_w_per_k = {}", num(nd.ambient_w_per_k)));
-        line(&format!("boundary = {}", q(b)));
-    }
-    // the unsensed node behind the slowest node (step 7b), last
-    for nd in m.nodes.iter().skip(id.nodes.len()) {
-        if nd.boundary.is_some() || nd.sensor.is_some() {
-            continue;
+        if let Some(b) = &nd.boundary {
+            line(&format!("boundary = {}", q(b)));
         }
-        let linked = id.unsensed.as_ref().map_or("", |u| u.linked_to.as_str());
-        line("");
-        line(&format!(
-            "# {}: a part no sensor reads, behind {linked} (the slowest node), linked to it and the room; no drift term; starts at the room's first reading",
-            nd.name
-        ));
-        line("[[nodes]]");
-        line(&format!("name = {}", q(&nd.name)));
-        line(&format!("capacity_j_per_k = {}", num(nd.capacity_j_per_k)));
-        line(&format!("ambient_w_per_k = {}", num(nd.ambient_w_per_k)));
     }
     if !m.links.is_empty() {
         line("");
