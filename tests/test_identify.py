@@ -709,3 +709,33 @@ def test_ctrl_c_stops_init_on_a_long_run():
     out, err, waited = ctrl_c(p, 3.0, 60)  # 3 s: inside the screening of the columns
     assert p.returncode == 130 and "interrupted" in out, (out, err)
     assert waited < 10, waited
+
+
+def test_a_part_no_sensor_reads_is_tried_behind_the_slowest_node(tmp_path, capsys):
+    """The synthetic VMC's bed carries no sensor and sits behind its column. Identification
+    tries a node no sensor reads behind the slowest calibrated node and keeps it when the
+    training BIC falls and its time constant is within the training rows: on the 8-h run it is
+    kept behind the column (about 2.2 h on 5.6 h of training rows), with no drift term of its
+    own, written last among the nodes with its comment, printed by init. On a 2-h run it would
+    take about 4 h on 1.4 h of training rows: not kept, and the note says why."""
+    c = syn.make_case("vmc", "none", 1, hours=HOURS, dt=DT_S)
+    m, s = Machine.identify(_run(c.train, "run.csv"))
+    u = s["unsensed"]
+    span = c.train["time_s"][s["train_rows"] - 1] - c.train["time_s"][0]
+    assert u["kept"] and u["linked_to"] == "column" and 0 < u["tau_s"] <= span, u
+    assert u["ssr_with"] < u["ssr_without"]
+    d = m.to_dict()
+    assert m.nodes[-1] == u["name"] and "sensor" not in d["nodes"][-1]
+    assert [sorted(x["between"]) for x in d["links"] if u["name"] in x["between"]] == [sorted(["column", u["name"]])]
+    assert all(u["name"] not in x["um_per_k"] for x in d["drift"])
+    assert f"# {u['name']}: a part no sensor reads, behind column (the slowest node)" in s["toml"]
+    assert Machine.from_toml(s["toml"]).to_dict()["nodes"] == d["nodes"]
+    short = syn.make_case("vmc", "none", 1, hours=(2.0, 1.0), dt=60.0)
+    _, s2 = Machine.identify(_run(short.train, "short.csv"))
+    assert not s2["unsensed"]["kept"]
+    assert any("was tried and not kept: its calibrated time constant" in n and "longer than the training rows" in n
+               for n in s2["notes"]), s2["notes"]
+    run = tmp_path / "run.csv"
+    syn.write_run_csv(run, c.train)
+    assert main(["init", str(run), "--out", str(tmp_path / "m.toml")]) == 0
+    assert f"{u['name']}" in capsys.readouterr().out.split("no sensor: a part behind column")[0].splitlines()[-1]
