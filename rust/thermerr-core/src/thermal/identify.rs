@@ -1921,13 +1921,14 @@ fn node_tau(m: &Machine, i: usize) -> f64 {
 /// The capacity of the unsensed mass's start, in capacities of the node it sits behind.
 pub const UNSENSED_CAPACITY: f64 = 3.0;
 
-/// The part of the machine no sensor reads (module docs, step 6): its name, the node it is linked to, its
-/// calibrated time constant, and the normalised training SSR without and with it.
+/// The part of the machine no sensor reads (module docs, step 6): its name, the node it is
+/// linked to, its calibrated time constant, and the normalised training SSR without and with it.
 #[derive(Clone, Debug, Serialize)]
 pub struct UnsensedMass {
     pub name: String,
     pub linked_to: String,
-    /// Kept in the network: it lowered the training fit's BIC.
+    /// Kept in the network: it lowered the training fit's BIC and its time constant is within
+    /// the training rows.
     pub kept: bool,
     pub ssr_without: f64,
     pub ssr_with: f64,
@@ -1939,8 +1940,10 @@ pub struct UnsensedMass {
 /// largest C / (G_ambient + links)): a capacity of [`UNSENSED_CAPACITY`] times that node's,
 /// that node's ambient conductance to the room and as its link, no drift term, calibrated from
 /// there with the rest (`opts`); kept when the training fit's BIC falls (its normalised SSR by
-/// more than 3·ln n, n the fitted residuals: its three values pay for themselves). With the note to say,
-/// the link's note when kept, and what was tried (None: no simulated node to link it to).
+/// more than 3·ln n, n the fitted residuals: its three values pay for themselves) and its
+/// calibrated time constant is at most `span` (s, the training rows). Returns the network to go
+/// on with and what was tried: the node, the note to say, the link's note when kept (None: no
+/// simulated node to link it to).
 fn with_unsensed_mass(
     cal: Calibration,
     view: &RunView<'_>,
