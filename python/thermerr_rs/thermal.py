@@ -69,7 +69,8 @@ class Machine:
         data"): pick the ambient, group the other sensors into nodes by fuzzy c-means, place the
         sources, link the nodes by response order, set values from each node's time constant and
         calibrate on the first ``train_fraction`` of the run; then a node no sensor reads (a bed,
-        a base) behind the slowest node, kept when it lowers the training fit's BIC. A temperature that a first-order lag
+        a base) behind the slowest node, kept when it lowers the training fit's BIC and its time
+        constant is within the training rows. A temperature that a first-order lag
         (at most 30 min) of another one reproduces within 3 noise levels is a second sensor on
         that part: a member of its node, not a node. A run with no ``U_*`` input column is
         driven by the temperature that rises most over the ambient, as a boundary node linked to
@@ -83,7 +84,7 @@ class Machine:
         the drift itself), ``copies`` (second sensors on a part: each
         ``column``, the node's sensor ``of``, ``tau_s``, ``gain``, ``noise_ratio``), ``spare``,
         ``links``, ``sources``, ``node_rule``, ``unsensed`` (the node no sensor reads tried behind
-        the slowest node: ``name``, ``linked_to``, ``kept`` (when it lowers the training BIC),
+        the slowest node: ``name``, ``linked_to``, ``kept`` (when it lowers the training BIC and settles within the training rows),
         ``ssr_without``, ``ssr_with``, ``tau_s``), ``suspect_readings`` (readings the run itself
         makes suspect, as in a diagnosis's report; also warned as
         :class:`~thermerr_rs.errors.SuspectReadingWarning`) and
