@@ -59,13 +59,23 @@ fn linear_param(param: Param, lo: f64, hi: f64, start: f64) -> FreeParam {
     }
 }
 
+/// The range of a thermal lag's time constant (s); at its floor a lag does nothing.
+pub const LAG_RANGE_S: (f64, f64) = (30.0, 30000.0);
+/// The range of an unmodelled source's link (W/K); at its floor the source does nothing.
+pub const SOURCE_RANGE_W_PER_K: (f64, f64) = (0.01, 200.0);
+
 pub(super) fn thermal_lag(m: &Machine, axis: usize) -> Spec {
     let mut lag = m.clone();
     lag.drift[axis].lag_s = Some(1200.0);
     Spec::new(
         Cause::ThermalLag,
         lag,
-        vec![log_param(Param::Lag(axis), 30.0, 30000.0, 1200.0)],
+        vec![log_param(
+            Param::Lag(axis),
+            LAG_RANGE_S.0,
+            LAG_RANGE_S.1,
+            1200.0,
+        )],
     )
 }
 
@@ -176,7 +186,12 @@ pub(super) fn unmodeled_source(m: &Machine, free_cols: &[String]) -> Vec<Spec> {
                 ..Spec::new(
                     Cause::UnmodeledSource,
                     src,
-                    vec![log_param(Param::Link(k), 0.01, 200.0, 1.0)],
+                    vec![log_param(
+                        Param::Link(k),
+                        SOURCE_RANGE_W_PER_K.0,
+                        SOURCE_RANGE_W_PER_K.1,
+                        1.0,
+                    )],
                 )
             });
         }
