@@ -64,6 +64,19 @@ def test_bad_input_is_one_line(example_run1, tmp_path, capsys):
     assert not (tmp_path / "m.json").exists()
 
 
+def test_a_warning_is_one_line(example_run1, tmp_path):
+    """A column the reader ignores is said on one line, as an error is, not with Python's file,
+    line number and source line (seen on a logger's export with a comment column)."""
+    lines = example_run1.read_text().splitlines()
+    p = tmp_path / "with_comment.csv"
+    p.write_text("\n".join([lines[0] + ",comment"] + [ln + ",ok" for ln in lines[1:]]) + "\n")
+    r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", "fit", str(p), "--axis", "E_x",
+                        "--out", str(tmp_path / "m.json"), "--quiet"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert r.stderr.splitlines() == [
+        f"thermerr: warning: {p}: ignoring columns without a T_/E_/U_ prefix: comment"], r.stderr
+
+
 def test_console_script_runs(example_run1, tmp_path):
     r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", "--version"], capture_output=True, text=True)
     assert r.returncode == 0 and "thermerr_rs" in r.stdout

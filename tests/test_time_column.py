@@ -78,6 +78,21 @@ def test_a_bad_date_time_is_one_line_naming_row_and_column(cell, why, tmp_path):
     assert not (tmp_path / "m.json").exists()
 
 
+def test_date_times_under_time_s_name_the_fix(tmp_path, capsys):
+    """The converse of the above: a logger's date-times in a column named ``time_s`` are refused
+    on one line that names the column to rename, from Python and from the command line (exit 2,
+    nothing written)."""
+    p = tmp_path / "dated.csv"
+    p.write_text("time_s,T_a,E_x\n2025-10-25 22:00:00,20,0\n2025-10-25 22:00:15,21,1\n")
+    with pytest.raises(tr.DataError, match=r"row 1, column `time_s`: .* name the column `time`") as e:
+        tr.read_run(p)
+    assert "\n" not in str(e.value)
+    assert main(["init", str(p), "--out", str(tmp_path / "m.toml")]) == 2
+    assert not (tmp_path / "m.toml").exists()
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "name the column `time`" in err[0], err
+
+
 def test_frames_carry_date_times_in_every_usual_form(example_run1):
     pd = pytest.importorskip("pandas")
     ref = tr.read_run(example_run1)

@@ -933,8 +933,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.json:
         args.quiet = True
-    # the result's own lines say them (warning: ..., note: suspect reading: ...)
-    warnings.filterwarnings("ignore", category=SuspectReadingWarning)
+    with warnings.catch_warnings():
+        # the result's own lines say them (warning: ..., note: suspect reading: ...)
+        warnings.filterwarnings("ignore", category=SuspectReadingWarning)
+        # any other warning is one line, as an error is (not Python's file, line and source)
+        warnings.showwarning = _one_line_warning
+        return _run(args)
+
+
+def _one_line_warning(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                      file: Any = None, line: str | None = None) -> None:
+    print(f"thermerr: warning: {message}", file=sys.stderr)
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         rc: int = args.func(args)
         sys.stdout.flush()

@@ -195,7 +195,16 @@ impl Run {
                     line: Some(line),
                     row: Some(row),
                     column: Some(names[j].clone()),
-                    reason: not_a_number(cell),
+                    reason: if names[j] == "time_s" && IsoClock::new().seconds(cell).is_ok() {
+                        // a logger's date-times under the name of seconds
+                        format!(
+                            "{cell:?} is not a number of seconds (a date-time: name the column \
+                             `time` and it is read as ISO-8601, the run's clock starting at its \
+                             first row)"
+                        )
+                    } else {
+                        not_a_number(cell)
+                    },
                 })?;
                 cells[j].push(v);
             }
@@ -757,6 +766,14 @@ mod tests {
         );
         let e = read_err(b"time_s;T_a\n0;1,2,3\n", b';');
         assert!(e.ends_with("\"1,2,3\" is not a number"), "{e}");
+        // a logger's date-times under `time_s`: the fix is the column's name
+        let e = err(b"time_s,T_a\n2024-03-01 08:00:00,20\n", NanPolicy::Error);
+        assert!(
+            e.contains("row 1") && e.contains("`time_s`") && e.contains("name the column `time`"),
+            "{e}"
+        );
+        let e = err(b"time_s,T_a\nnoon,20\n", NanPolicy::Error);
+        assert!(e.ends_with("\"noon\" is not a number"), "{e}");
         let e = err(b"time_s,T_a\n0,20\n0,21\n", NanPolicy::Error);
         assert!(
             e.contains("strictly increasing") && e.contains("row 2"),
