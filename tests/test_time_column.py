@@ -91,6 +91,14 @@ def test_date_times_under_time_s_name_the_fix(tmp_path, capsys):
     assert not (tmp_path / "m.toml").exists()
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "name the column `time`" in err[0], err
+    # a frame's datetime64 column under `time_s` (numpy would cast it to nanoseconds), with or
+    # without a time zone, and its text: the same words
+    pd = pytest.importorskip("pandas")
+    stamps = pd.Series(pd.to_datetime(["2025-10-25 22:00:00", "2025-10-25 22:00:15"]))
+    for col in (stamps, stamps.dt.tz_localize("Europe/Berlin"), stamps.astype(str)):
+        frame = pd.DataFrame({"time_s": col, "T_a": [20.0, 21.0], "E_x": [0.0, 1.0]})
+        with pytest.raises(tr.DataError, match=r"row 1, column `time_s`: \"2025-10-25 22:00:00.*name the column `time`"):
+            tr.Run.from_frame(frame)
 
 
 def test_frames_carry_date_times_in_every_usual_form(example_run1):

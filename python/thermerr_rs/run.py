@@ -55,7 +55,7 @@ def _not_a_number(source: str, name: str, col: Any) -> str:
         try:
             float(v)
         except (TypeError, ValueError):
-            return f"{source}, row {i + 1}, column `{name}`: \"{v}\" is not a number"
+            return f"{source}, row {i + 1}, column `{name}`: {_core.not_a_number(name, str(v))}"
     return f"{source}: column `{name}` is not numeric"
 
 
@@ -105,6 +105,10 @@ class Run:
                 continue
             if hasattr(col, "to_numpy"):
                 col = col.to_numpy()
+            if name == "time_s" and getattr(getattr(col, "dtype", None), "kind", "") == "M" and len(col):
+                # date-times under the name of seconds: numpy would cast them to nanoseconds
+                cell = str(np.datetime_as_string(np.asarray(col)[0], unit="s")).replace("T", " ")
+                raise DataError(f"{source}, row 1, column `time_s`: {_core.not_a_number(name, cell)}")
             try:
                 cols.append(np.asarray(col, dtype=np.float64))
             except (TypeError, ValueError):

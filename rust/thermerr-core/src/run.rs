@@ -195,16 +195,7 @@ impl Run {
                     line: Some(line),
                     row: Some(row),
                     column: Some(names[j].clone()),
-                    reason: if names[j] == "time_s" && IsoClock::new().seconds(cell).is_ok() {
-                        // a logger's date-times under the name of seconds
-                        format!(
-                            "{cell:?} is not a number of seconds (a date-time: name the column \
-                             `time` and it is read as ISO-8601, the run's clock starting at its \
-                             first row)"
-                        )
-                    } else {
-                        not_a_number(cell)
-                    },
+                    reason: not_a_number(&names[j], cell),
                 })?;
                 cells[j].push(v);
             }
@@ -484,9 +475,17 @@ pub fn is_data_column(name: &str) -> bool {
         .any(|p| name.starts_with(p) && name.len() > p.len())
 }
 
-/// The refusal of a cell that is not a number, with the likely fix for a decimal comma (a
-/// spreadsheet saved in a German or French locale writes `20,5` for 20.5).
-fn not_a_number(cell: &str) -> String {
+/// The refusal of a cell of `column` that is not a number, with the likely fix: for a decimal
+/// comma (a spreadsheet saved in a German or French locale writes `20,5` for 20.5), and for a
+/// logger's date-times in `time_s` (the column to name `time`). The CSV reader's and
+/// `Run.from_frame`'s words.
+pub fn not_a_number(column: &str, cell: &str) -> String {
+    if column == "time_s" && IsoClock::new().seconds(cell).is_ok() {
+        return format!(
+            "{cell:?} is not a number of seconds (a date-time: name the column `time` and it is \
+             read as ISO-8601, the run's clock starting at its first row)"
+        );
+    }
     let dotted = cell.trim().replacen(',', ".", 1);
     match parse_cell(&dotted) {
         Some(_) if cell.matches(',').count() == 1 => {

@@ -95,6 +95,12 @@ fn is_data_column(name: &str) -> bool {
     thermerr_core::run::is_data_column(name)
 }
 
+/// Why a cell of `column` is not a number, in the CSV reader's words (`thermerr_core::run`).
+#[pyfunction]
+fn not_a_number(column: &str, cell: &str) -> String {
+    thermerr_core::run::not_a_number(column, cell)
+}
+
 /// Predictions shaped into CNC offsets (`thermerr_core::shape`), from a fresh state: `spec` in
 /// the text form `limit=50,rate=2,deadband=0.5,unit=0.1,bits=16`.
 #[pyfunction]
@@ -144,6 +150,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(run_from_columns, m)?)?;
     m.add_function(wrap_pyfunction!(iso_seconds, m)?)?;
     m.add_function(wrap_pyfunction!(is_data_column, m)?)?;
+    m.add_function(wrap_pyfunction!(not_a_number, m)?)?;
     m.add_function(wrap_pyfunction!(scores, m)?)?;
     m.add_function(wrap_pyfunction!(shape_series, m)?)?;
     Ok(())
