@@ -85,10 +85,9 @@ pub const FLOOR_FACTOR: f64 = 1.5;
 
 /// The parameter, its value and its floor when a lag or an unmodelled source ended at the floor
 /// of its range ([`FLOOR_FACTOR`]): there the extension does nothing, and what the candidate
-/// gains is the refit of the network that comes with it, not the cause. Measured 2026-11-28 on
-/// the real 46-h run, an identified network calibrated within a factor 10 (a trial): a source
-/// from `T_t11` ended at 0.0101 W/K
-/// (floor 0.01) and "cut" E_ch2's held-out error by 39 %.
+/// gains is the refit of the network that comes with it, not the cause. Seen 2026-11-28 on the
+/// real 46-h run, an identified network calibrated within a factor 10 (a trial): a source from
+/// `T_t11` ended at 0.0101 W/K (floor 0.01) and "cut" E_ch2's held-out error by 39 %.
 pub fn at_floor(c: &Candidate) -> Option<(&'static str, f64, f64)> {
     let (name, floor) = match c.cause {
         Cause::UnmodeledSource => ("w_per_k", SOURCE_RANGE_W_PER_K.0),
