@@ -1656,7 +1656,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     }
     let cal = cals.into_iter().nth(best).expect("the best start");
     // 7b. a part no sensor reads, behind the slowest node (module docs, step 6)
-    let (cal, tried) = with_unsensed_mass(cal, &view, &cal_opts, (t[m - 1] - t[0]).max(60.0))?;
+    let (cal, tried) = with_unsensed_mass(cal, &view, &cal_opts, span)?;
     let mut unsensed = None;
     if let Some((info, note, link)) = tried {
         notes.push(note);
