@@ -423,7 +423,8 @@ def test_a_probe_that_fails_in_the_held_out_rows_is_scored_where_it_reads(tmp_pa
     out = tmp_path / "early"
     assert main(["diagnose", str(tmp_path / "early.csv"), "--machine", str(nominal), "--out", str(out)]) == 2
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("thermerr: error")]
-    assert len(err) == 1 and "early.csv: no held-out row of E_z can be scored" in err[0], err
+    assert len(err) == 1 and f"early.csv: 0 of the {n - split} held-out rows of E_z" in err[0], err
+    assert f"fails over rows {split - 20 + 1}-{n}" in err[0], err
     assert not out.exists()
 
 

@@ -115,6 +115,71 @@ def test_an_axis_the_machine_lacks_is_one_clear_error(shop, tmp_path, capsys):
         diagnose_axes(run, m, axes=["E_ch1", "E_ch1"])
 
 
+def test_a_probe_with_nothing_to_diagnose_is_left_out_of_every_axis(tmp_path, capsys):
+    """A factory's run where one probe is dead throughout (E_ch2 reads 0 in every row) and one
+    is re-zeroed by 40 µm before the held-out part and never back (E_ch4): by default (every
+    axis) both are left out, each with the one line that says why, and the other three are
+    diagnosed exactly as when asked for by name; before, the whole diagnosis stopped with exit
+    2 on the first of them. Named with --axis, such a probe is refused as before; with every
+    probe dead there is nothing to diagnose (exit 2, nothing written)."""
+    from thermerr_rs.errors import ShapeError, SuspectReadingWarning
+
+    c = syn.make_shop_case(2, hours=12.0, dt=60.0, hidden={"E_ch3": "ambient_coupling"})
+    cols = {k: np.array(v, dtype=float) for k, v in c.train.items()}
+    n = len(cols["time_s"])
+    cols["E_ch2"][:] = 0.0
+    cols["E_ch4"][round(0.6 * n):] -= 40.0  # held out: the last 30 %
+    run_csv, toml = tmp_path / "shop.csv", tmp_path / "shop.toml"
+    syn.write_run_csv(run_csv, cols)
+    toml.write_text(c.nominal_toml())
+    out = tmp_path / "out"
+    assert main(["diagnose", str(run_csv), "--machine", str(toml), "--out", str(out)]) == 0
+    cap = capsys.readouterr()
+    summary = json.loads((out / "report.json").read_text())
+    kept = ["E_ch1", "E_ch3", "E_ch5"]
+    assert summary["axes"] == kept
+    assert list(summary["skipped"]) == ["E_ch2", "E_ch4"]
+    assert "shop.csv: E_ch2 reads one value (0) in every row" in summary["skipped"]["E_ch2"]
+    assert f"shop.csv: 0 of the {n - round(0.7 * n)} held-out rows of E_ch4" in summary["skipped"]["E_ch4"]
+    assert f"fails over rows {round(0.6 * n) + 1}-{n}" in summary["skipped"]["E_ch4"]
+    assert sorted(p.name for p in out.iterdir() if p.name.startswith("E_ch2") or p.name.startswith("E_ch4")) == []
+    assert "E_ch2 not diagnosed" in (out / "report.html").read_text()
+    lines = [ln for ln in cap.out.splitlines() if "not diagnosed" in ln]
+    assert [ln.split(":")[0] for ln in lines] == ["warning", "warning"], cap.out
+    assert summary["verdicts"]["E_ch3"] == "ambient_coupling", summary["verdicts"]
+    # the axes that are diagnosed come out as when asked for by name, figure for figure
+    named = diagnose_axes(tr.read_run(run_csv), Machine.load(toml), axes=kept, progress=False)
+    for a in kept:
+        got = json.loads((out / f"{a}.report.json").read_text())
+        want = dict(named[a].report)
+        got.pop("stage_s"), want.pop("stage_s")
+        assert got == json.loads(json.dumps(want)), a
+    # Python: the same, said as a suspect-reading warning per axis left out
+    with pytest.warns(SuspectReadingWarning) as rec:
+        res = diagnose_axes(tr.read_run(run_csv), Machine.load(toml), progress=False)
+    assert [str(w.message).split(":")[0] for w in rec if "not diagnosed" in str(w.message)] == [
+        "E_ch2 not diagnosed", "E_ch4 not diagnosed"]
+    assert res.axes == kept and list(res.skipped) == ["E_ch2", "E_ch4"]
+    assert "warning: E_ch2 not diagnosed" in str(res)
+    # named: refused, one line, nothing written
+    for axis, says in (("E_ch2", "E_ch2 reads one value (0)"), ("E_ch4", "held-out rows of E_ch4")):
+        out = tmp_path / f"named_{axis}"
+        assert main(["diagnose", str(run_csv), "--machine", str(toml), "--out", str(out),
+                     "--axis", "E_ch1", "--axis", axis]) == 2
+        err = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("thermerr: error")]
+        assert len(err) == 1 and says in err[0], err
+        assert not out.exists()
+    # every probe dead: nothing to diagnose
+    for a in syn.SHOP_CHANNELS:
+        cols[a][:] = 0.0
+    syn.write_run_csv(tmp_path / "dead.csv", cols)
+    out = tmp_path / "dead"
+    with pytest.raises(ShapeError, match="no axis can be diagnosed: .*dead.csv: E_ch1 reads one value"):
+        diagnose_axes(tr.read_run(tmp_path / "dead.csv"), Machine.load(toml), progress=False)
+    assert main(["diagnose", str(tmp_path / "dead.csv"), "--machine", str(toml), "--out", str(out)]) == 2
+    assert not out.exists()
+
+
 def test_a_fast_run_is_calibrated_on_every_kth_sample(shop):
     """15-s samples: k = 4. Calibrating the run and calibrating its every-4th-row subsample (which
     is sampled at 60 s and so not thinned again) give the same machine, parameter for parameter."""

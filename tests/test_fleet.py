@@ -305,6 +305,31 @@ def test_diagnose_takes_every_axis_of_the_machine_as_thermerr_diagnose(tmp_path,
     assert "E_q" in capsys.readouterr().err and not (tmp_path / "bad").exists()
 
 
+@pytest.mark.filterwarnings("ignore:E_y not diagnosed")  # said in the figures and the table
+def test_diagnose_leaves_out_a_runs_dead_probe_and_diagnoses_the_rest(tmp_path):
+    """One machine of the fleet with a probe dead throughout (the bundled HMC's run, E_y reading
+    0 in every row): by default (every axis) that run is diagnosed on the other axes, the dead
+    one named in its figures (``skipped``) and its table line, not the whole run failed."""
+    d = tmp_path / "hmc"
+    d.mkdir()
+    with open(EXAMPLES / "hmc_run1.csv", newline="") as f:
+        rows_in = list(csv.DictReader(f))
+    for r in rows_in:
+        r["E_y"] = "0"
+    with open(d / "dead_y.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows_in[0]))
+        w.writeheader()
+        w.writerows(rows_in)
+    machine = EXAMPLES / "hmc_machine.toml"
+    rows = fleet.diagnose_runs(d, machine, tmp_path / "out")
+    assert [r.ok for r in rows] == [True], rows[0].error
+    axes = [a for a in tr.Machine.load(machine).axes if a != "E_y"]
+    assert rows[0].figures["axes"] == ",".join(axes) and rows[0].figures["skipped"] == "E_y"
+    assert "E_y not diagnosed" in fleet.table(rows)
+    summary = json.loads((tmp_path / "out" / "dead_y" / "report.json").read_text())
+    assert "E_y reads one value (0) in every row" in summary["skipped"]["E_y"]
+
+
 FLEET_CTRL_C = textwrap.dedent("""\
     import sys, thermerr_rs as tr
     from thermerr_rs import fleet, synthetic as syn

@@ -216,9 +216,10 @@ class MachineModel:
         noise_ratio: float = 2.0,
         network: str = "auto",
         progress: Callable[[int, int, int], object] | None = None,
-    ) -> list[dict[str, Any]]:
+    ) -> tuple[list[dict[str, Any]], list[tuple[str, str]]]:
         """``diagnose`` of every axis in ``axes`` (empty: every drift entry), in parallel; a list
-        of its dicts in ``axes`` order."""
+        of its dicts in ``axes`` order, and the axes left out as ``(axis, reason)`` (``axes``
+        empty: a probe that gives nothing to diagnose on the run)."""
         ...
 
 # --- support vector regression -------------------------------------------------------------------

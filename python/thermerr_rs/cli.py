@@ -607,9 +607,11 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         _stage(args, f"diagnosing {args.machine} on {run.source}, {len(axes)} axes ({', '.join(axes)}) in "
                      "parallel: calibrating each baseline, screening every candidate extension ...")
         t0 = time.perf_counter()
-        multi = diagnose_axes(run, machine, hold, axes=axes, network=args.network,
+        # every axis by default: a probe with nothing to diagnose is left out, not fatal
+        multi = diagnose_axes(run, machine, hold, axes=args.axis, network=args.network,
                               progress=_progress_enabled(args))
-        _stage(args, f"diagnosed {len(axes)} axes in {time.perf_counter() - t0:.1f} s")
+        _stage(args, f"diagnosed {len(multi.axes)} axes in {time.perf_counter() - t0:.1f} s"
+                     + "".join(f"; {a} left out (see below)" for a in multi.skipped))
         for a in multi.axes:
             _stage(args, f"  {a}: " + _stage_times(multi[a].report))
         result: Diagnosis | AxesDiagnosis = multi

@@ -304,22 +304,25 @@ def _diagnose_task(path: str, machine_toml: str, machine_file: str, axes: list[s
         machine = Machine.from_toml(machine_toml, machine_file)
         run = read_run(path, nan=nan)  # type: ignore[arg-type]
         target = Path(out_dir) / Path(path).stem
-        if len(axes) == 1:
-            d = diagnose(run, machine, axis=axes[0], holdout_fraction=holdout_fraction, network=network,
+        todo = axes or machine.axes
+        if len(todo) == 1:
+            d = diagnose(run, machine, axis=todo[0], holdout_fraction=holdout_fraction, network=network,
                          progress=False)
             _unless_stopped()
             d.write(target)
             suspect = sorted({sp["column"] for sp in d.report.get("suspect_readings", [])})
-            return str(target), _finite({"axis": axes[0], **_diagnosis_figures(d), "suspect": ",".join(suspect)})
-        # several axes, as `thermerr diagnose` writes them: a summary and <axis>.report.* per axis
-        multi = diagnose_axes(run, machine, axes=axes, holdout_fraction=holdout_fraction, network=network,
-                              progress=False)
+            return str(target), _finite({"axis": todo[0], **_diagnosis_figures(d), "suspect": ",".join(suspect)})
+        # several axes, as `thermerr diagnose` writes them: a summary and <axis>.report.* per axis;
+        # every axis by default (`axes` empty), where a probe with nothing to diagnose is left out
+        multi = diagnose_axes(run, machine, axes=axes or None, holdout_fraction=holdout_fraction,
+                              network=network, progress=False)
         _unless_stopped()
         multi.write(target)
         figures: dict[str, Any] = {"axes": ",".join(multi.axes)}
         for a in multi.axes:
             figures.update({f"{a}.{k}": v for k, v in _diagnosis_figures(multi[a]).items()})
         figures["suspect"] = ",".join(sorted({sp["column"] for sp in multi.report["suspect_readings"]}))
+        figures["skipped"] = ",".join(multi.skipped)
         return str(target), _finite(figures)
 
     return _guarded(path, work)
@@ -433,6 +436,8 @@ def table(results: Sequence[RunResult]) -> str:
             sus = f"; suspect readings in {f['suspect'].replace(',', ', ')}" if f.get("suspect") else ""
             if "axes" in f:
                 lines = [f"{a} {one(a + '.')}" for a in f["axes"].split(",")]
+                lines += [f"{a} not diagnosed: its probe gives nothing to diagnose (report.json says why)"
+                          for a in f.get("skipped", "").split(",") if a]
                 return [*lines[:-1], lines[-1] + sus]
             return [one("") + sus]
         rate = f.get("compensation_rate")
@@ -556,7 +561,11 @@ def diagnose_runs(
     remainder) and ``baseline_unique`` (False where a
     recalibrated baseline has a second solution: :attr:`~thermerr_rs.thermal.Diagnosis.baseline_unique`);
     for several axes: ``axes`` (comma-separated), the same figures per axis as ``<axis>.verdict``,
-    ``<axis>.gain_pct``, ... (one column each in ``fleet-summary.csv``), and ``suspect``.
+    ``<axis>.gain_pct``, ... (one column each in ``fleet-summary.csv``), ``suspect``, and
+    ``skipped``: by default every axis is diagnosed, and an axis whose probe gives nothing to
+    diagnose on that run (dead throughout, or failing over its held-out rows) is left out of that
+    run's diagnosis and named here (comma-separated; why, in the run's ``report.json``), the
+    others diagnosed. ``axes`` lists the axes diagnosed.
     An axis the machine does not map is refused before any task starts.
     ``network``: the baseline's network
     rule, as for :func:`~thermerr_rs.thermal.diagnose`. A machine file that cannot be read, or a
@@ -574,7 +583,8 @@ def diagnose_runs(
     if unknown or not axes:
         raise ParameterError(f"axis: {', '.join(unknown) or 'none given'}: {source} maps "
                              f"{', '.join(m.axes) or 'no axis'}")
-    args = (m.to_toml(), source, axes, float(holdout_fraction), nan, str(out_dir), network)
+    # every axis: passed as none named, so that a run's dead probe is left out, not the run failed
+    args = (m.to_toml(), source, [] if axis is None else axes, float(holdout_fraction), nan, str(out_dir), network)
     results = _compute(_diagnose_task, paths, args, scheduler, workers, "diagnose")
     write_summary(results, out_dir)
     return results

@@ -387,6 +387,8 @@ def render_axes_html(summary: dict[str, Any]) -> str:
         + (f"<p>The network was <b>identified from data</b> by <code>thermerr init</code>, "
            f"{esc(identified_caveat(summary.get('driven_by')))}</p>" if summary.get("identified") else "")
         + suspects_html(summary.get("suspect_readings", []))
+        + "".join(f"<p><b>{esc(a)} not diagnosed</b>: {esc(why)}</p>"
+                  for a, why in summary.get("skipped", {}).items())
         + "<table><tr><th>axis</th><th>verdict</th><th>causes</th><th>baseline network</th>"
         "<th>baseline RMS (µm)</th><th>extended RMS (µm)</th><th>gain (%)</th>"
         "<th>unexplained remainder (µm)</th></tr>" + "".join(rows) + "</table></body></html>\n")

@@ -393,11 +393,15 @@ def _diagnosis(d: dict[str, Any]) -> Diagnosis:
 class AxesDiagnosis:
     """The outcome of :func:`diagnose_axes`: one :class:`Diagnosis` per error axis (``by_axis``,
     in the order diagnosed; ``d["E_y"]`` is one of them). ``report`` is the summary written as
-    report.json: every axis's verdict, causes (each with its ``axis``), gain and remainder."""
+    report.json: every axis's verdict, causes (each with its ``axis``), gain and remainder.
+    ``skipped``: the axes left out, each with the one line that says why (every axis diagnosed
+    by default, and a probe dead throughout or failing over the held-out rows: nothing to
+    diagnose there); report.json's ``"skipped"``."""
 
     by_axis: dict[str, Diagnosis]
     run: str
     machine: str
+    skipped: dict[str, str] = field(default_factory=dict)
 
     def __getitem__(self, axis: str) -> Diagnosis:
         return self.by_axis[axis]
@@ -431,6 +435,7 @@ class AxesDiagnosis:
             "driven_by": next((d.report["identification"].get("driven_by") for d in self.by_axis.values()
                                if d.report.get("identification")), None),
             "suspect_readings": _unique_suspects(d.report.get("suspect_readings", []) for d in self.by_axis.values()),
+            "skipped": dict(self.skipped),
         }
 
     def write(self, out_dir: str | os.PathLike[str]) -> Path:
@@ -452,6 +457,7 @@ class AxesDiagnosis:
                      "the iteration limit, or from a second start it fits the training rows as well (within 5 %) or "
                      "better and holds out differently (see each axis's evidence); --network best or keep gives a "
                      "baseline with one solution")
+        text += "".join(f"\nwarning: {a} not diagnosed: {why}" for a, why in self.skipped.items())
         return (text + _suspect_lines(self.report["suspect_readings"])
                 + (_identified_line(self.report["driven_by"]) if self.report["identified"] else ""))
 
@@ -466,14 +472,20 @@ def diagnose_axes(run: Run, machine: Machine, holdout: Run | None = None, *, axe
     ``network``: as for :func:`diagnose`, per axis; under ``"shared"`` the one network is
     calibrated once (on the temperatures alone) and every axis keeps it.
     ``progress``: one bar of every axis's calibrations (default: when stderr is a terminal).
-    A ``holdout`` that continues ``run`` is joined to it, as for :func:`diagnose`."""
+    A ``holdout`` that continues ``run`` is joined to it, as for :func:`diagnose`.
+    With ``axes`` not given, an axis whose probe gives nothing to diagnose on this run (one value
+    in every row; fewer than 10 held-out rows that can be scored, the probe, the room or a
+    boundary failing over the rest) is left out with a :class:`SuspectReadingWarning` and listed
+    in ``skipped``, and the other axes are diagnosed; it is a :class:`ShapeError` only when no
+    axis is left. An axis named in ``axes`` is diagnosed or refused (:class:`ShapeError`)."""
     run, holdout, train_rows = _joined(run, holdout)
     with _progress_bar(progress, "diagnosis of the axes") as cb:
-        ds = machine._inner.diagnose_axes(*_run_args(run), _run_args(holdout) if holdout is not None else None,
+        ds, skipped = machine._inner.diagnose_axes(*_run_args(run), _run_args(holdout) if holdout is not None else None,
                                           axes=list(axes or []), holdout_fraction=holdout_fraction,
                                           train_rows=train_rows, min_score=min_score, noise_ratio=noise_ratio,
                                           network=network, progress=cb)
     out = {d.axis: d for d in map(_diagnosis, ds)}
-    res = AxesDiagnosis(out, run.source, machine._inner.file)
+    res = AxesDiagnosis(out, run.source, machine._inner.file, dict(skipped))
     _warn_suspects(sp["text"] for sp in res.report["suspect_readings"])
+    _warn_suspects(f"{a} not diagnosed: {why}" for a, why in skipped)
     return res

@@ -326,7 +326,9 @@ impl PyMachine {
     }
 
     /// The diagnosis of every axis in `axes`, one per axis in parallel, each on the shared
-    /// temperatures and its own error column; a list of `diagnose`'s dicts in `axes` order.
+    /// temperatures and its own error column; a list of `diagnose`'s dicts in `axes` order, and
+    /// the axes left out (every drift entry, `axes` empty: a probe with nothing to diagnose) as
+    /// `(axis, reason)`.
     #[pyo3(signature = (source, time, names, data, holdout = None, *, axes, holdout_fraction = 0.3, train_rows = None, min_score = 0.1, noise_ratio = 2.0, network = "auto", progress = None))]
     #[allow(clippy::too_many_arguments, clippy::type_complexity)]
     fn diagnose_axes<'py>(
@@ -344,7 +346,7 @@ impl PyMachine {
         noise_ratio: f64,
         network: &str,
         progress: Option<Py<PyAny>>,
-    ) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    ) -> PyResult<(Vec<Bound<'py, PyDict>>, Vec<(String, String)>)> {
         let (opts, watch) = diagnose_options(
             None,
             holdout_fraction,
@@ -354,7 +356,7 @@ impl PyMachine {
             network,
             progress,
         )?;
-        let diags = self.on_runs(
+        let (diags, skipped) = self.on_runs(
             py,
             source,
             &time,
@@ -364,10 +366,14 @@ impl PyMachine {
             watch,
             |m, v, h| diagnose_axes(m, v, h, &axes, &opts),
         )?;
-        diags
+        let diags = diags
             .iter()
             .map(|d| diagnosis_dict(py, d, &self.file))
-            .collect()
+            .collect::<PyResult<_>>()?;
+        Ok((
+            diags,
+            skipped.into_iter().map(|s| (s.axis, s.reason)).collect(),
+        ))
     }
 }
 

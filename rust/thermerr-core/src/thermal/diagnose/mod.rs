@@ -805,23 +805,17 @@ fn diagnose_on(
         )));
     }
     let suspect_readings = suspects(train, hold, &axis);
-    // a probe that reads one value in every row of a run (dead, disconnected) has no drift to
-    // diagnose: "none" would be a verdict on nothing
-    if let Some(sp) = suspect_readings
-        .iter()
-        .find(|sp| sp.column == axis && sp.kind == crate::guard::SuspectKind::Constant)
-    {
-        return Err(Error::Shape(format!(
-            "{}: the probe does not move, nothing to diagnose; mend the probe, or diagnose the other axes alone (--axis, or axes= in Python)",
-            sp.text.split(": a dead or disconnected").next().unwrap_or(&sp.text)
-        )));
-    }
     let held = HeldOut {
         run: hold.unwrap_or(train),
         from: if hold.is_some() { 0 } else { split },
         window: opts.init_window,
         axis: &axis,
     };
+    if let Some(why) = unusable_axis(m, &held, &suspect_readings)? {
+        return Err(Error::Shape(format!(
+            "{why}; mend the probe, or diagnose the other axes alone (--axis, or axes= in Python)"
+        )));
+    }
     let mut copts = opts.calibration.clone();
     copts.axis = axis.clone();
     copts.fit_rows = Some(split);
@@ -1027,6 +1021,63 @@ fn diagnose_on(
     })
 }
 
+/// Why the probe of `held.axis` gives nothing to diagnose on this run, in one line naming the
+/// run and the probe, or `None` when it can be diagnosed: it reads one value in every row of a
+/// run (dead, disconnected: "none" would be a verdict on nothing), or fewer than
+/// [`MIN_HOLDOUT_ROWS`] held-out rows can be scored (the probe, the room or a boundary fails over
+/// the rest: [`crate::guard::failing_rows`]). `suspects`: [`suspects`] of the runs and the axis.
+/// Cheap (no calibration): [`diagnose_axes`] asks it of every axis before any is diagnosed.
+fn unusable_axis(
+    m: &Machine,
+    held: &HeldOut<'_, '_>,
+    suspects: &[Suspect],
+) -> Result<Option<String>> {
+    let axis = held.axis;
+    if let Some(sp) = suspects
+        .iter()
+        .find(|sp| sp.column == axis && sp.kind == crate::guard::SuspectKind::Constant)
+    {
+        let what = sp
+            .text
+            .split(": a dead or disconnected")
+            .next()
+            .unwrap_or(&sp.text);
+        return Ok(Some(format!(
+            "{what}: the probe does not move, nothing to diagnose"
+        )));
+    }
+    let (run, from) = (held.run, held.from);
+    let tg = targets(m, run, axis)?;
+    let scored = (from..run.len()).filter(|&k| tg.error.reads(k)).count();
+    if scored < MIN_HOLDOUT_ROWS {
+        // the failing rows that reach into the held-out part, as the run's errors count rows (from 1)
+        let rows: Vec<String> = tg
+            .error
+            .failing
+            .iter()
+            .filter(|r| r.end > from)
+            .map(|r| format!("{}-{}", r.start + 1, r.end))
+            .collect();
+        return Ok(Some(format!(
+            "{}: {scored} of the {} held-out rows of {axis} (rows {}-{}) can be scored, at least {MIN_HOLDOUT_ROWS} are needed: the probe, the room or a boundary fails over rows {}",
+            run.source,
+            run.len() - from,
+            from + 1,
+            run.len(),
+            rows.join(", ")
+        )));
+    }
+    Ok(None)
+}
+
+/// An axis a diagnosis of the machine's axes left out ([`diagnose_axes`]), and why.
+#[derive(Clone, Debug, Serialize)]
+pub struct SkippedAxis {
+    pub axis: String,
+    /// One line naming the run and the probe ([`unusable_axis`]).
+    pub reason: String,
+}
+
 /// The suspect readings of the training run and the separate held-out run (if any): their
 /// `T_*` columns and `axis`.
 fn suspects(train: &RunView<'_>, hold: Option<&RunView<'_>>, axis: &str) -> Vec<Suspect> {
@@ -1047,18 +1098,62 @@ fn suspects(train: &RunView<'_>, hold: Option<&RunView<'_>>, axis: &str) -> Vec<
 /// The diagnosis of each of `axes` (every drift entry of the machine when empty), in parallel,
 /// in `axes` order. Each axis is diagnosed on the shared temperatures and its own error column:
 /// its network is calibrated on the temperatures and that axis, and its causes are its own.
+///
+/// Every drift entry (`axes` empty): an axis whose probe gives nothing to diagnose on this run
+/// (dead throughout, or failing over the held-out rows: [`unusable_axis`]) is left out and
+/// returned with its reason, and the others are diagnosed; a factory's probe that fails should
+/// not cost the verdicts of the probes that work. Only when every axis is left out is it an
+/// error. Axes given by name are diagnosed or refused, as [`diagnose`] does: the caller asked
+/// for that probe.
 pub fn diagnose_axes(
     m: &Machine,
     train: &RunView<'_>,
     hold: Option<&RunView<'_>>,
     axes: &[String],
     opts: &DiagnoseOptions,
-) -> Result<Vec<Diagnosis>> {
-    let axes: Vec<String> = if axes.is_empty() {
+) -> Result<(Vec<Diagnosis>, Vec<SkippedAxis>)> {
+    let every = axes.is_empty();
+    let mut axes: Vec<String> = if every {
         m.drift.iter().map(|d| d.axis.clone()).collect()
     } else {
         axes.to_vec()
     };
+    let mut skipped = Vec::new();
+    if every {
+        let split = split_of(train, hold.is_some(), opts)?;
+        let mut why = Vec::new();
+        for a in &axes {
+            let held = HeldOut {
+                run: hold.unwrap_or(train),
+                from: if hold.is_some() { 0 } else { split },
+                window: opts.init_window,
+                axis: a,
+            };
+            why.push(unusable_axis(m, &held, &suspects(train, hold, a))?);
+        }
+        if why.iter().all(Option::is_some) && !why.is_empty() {
+            let lines: Vec<String> = why.into_iter().flatten().collect();
+            return Err(Error::Shape(format!(
+                "no axis can be diagnosed: {}; mend the probes",
+                lines.join("; ")
+            )));
+        }
+        let kept: Vec<String> = axes
+            .iter()
+            .zip(&why)
+            .filter(|(_, w)| w.is_none())
+            .map(|(a, _)| a.clone())
+            .collect();
+        for (a, w) in axes.iter().zip(why) {
+            if let Some(reason) = w {
+                skipped.push(SkippedAxis {
+                    axis: a.clone(),
+                    reason,
+                });
+            }
+        }
+        axes = kept;
+    }
     for (k, a) in axes.iter().enumerate() {
         if axes[..k].contains(a) {
             return Err(Error::param("axes", format!("`{a}` is given twice")));
@@ -1095,7 +1190,8 @@ pub fn diagnose_axes(
             };
             diagnose_on(m, shared.as_ref(), train, hold, &o, &mates)
         })
-        .collect()
+        .collect::<Result<Vec<_>>>()
+        .map(|d| (d, skipped))
 }
 
 #[cfg(test)]
