@@ -279,6 +279,44 @@ def test_several_axes():
     assert m1.axes == ["E_y"]
 
 
+def test_a_dead_probe_is_left_out_of_every_axis_and_refused_by_name(tmp_path, capsys):
+    """A probe that reads one value in every row (E_y at 0): before, init wrote its axis with a
+    drift map of zeros, which every diagnosis then left out. Now with every axis it is left out
+    of the file with a note (the network and the other axis's map are those of the run without
+    it), named with --axis it is refused (exit 2, one line, nothing written), and with every
+    probe dead there is nothing to map."""
+    c = syn.make_case("lathe", "none", 3, hours=HOURS, dt=DT_S)
+    cols = dict(c.train)
+    without = tmp_path / "clean.csv"
+    syn.write_run_csv(without, cols)
+    cols["E_y"] = np.zeros_like(cols["E_x"])
+    run = tmp_path / "dead.csv"
+    syn.write_run_csv(run, cols)
+    out = tmp_path / "m.toml"
+    assert main(["init", str(run), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert f"note: E_y left out of the file: {run}: E_y reads one value (0) in every row" in text, text
+    assert "suspect reading" not in text  # the left-out axis's own suspect lines: said by the note
+    assert Machine.load(out).axes == ["E_x"]
+    assert main(["init", str(without), "--axis", "E_x", "--out", str(tmp_path / "clean.toml")]) == 0
+    capsys.readouterr()
+    body = [ln for ln in out.read_text().splitlines() if not ln.startswith(("#", "name", "source", "run ="))]
+    clean = [ln for ln in (tmp_path / "clean.toml").read_text().splitlines()
+             if not ln.startswith(("#", "name", "source", "run ="))]
+    assert body == clean
+    for args, says in ((["--axis", "E_y"], "E_y reads one value (0) in every row"),
+                       (["--axis", "E_x", "--axis", "E_y"], "or leave the axis out")):
+        bad = tmp_path / "bad.toml"
+        assert main(["init", str(run), "--out", str(bad), *args]) == 2
+        err = [x for x in capsys.readouterr().err.splitlines() if x.startswith("thermerr: error:")]
+        assert len(err) == 1 and says in err[0], err
+        assert not bad.exists()
+    cols["E_x"] = np.full_like(cols["E_x"], 3.5)
+    syn.write_run_csv(run, cols)
+    with pytest.raises(ThermerrError, match="E_x reads one value .*; .*E_y reads one value .*mend the probe$"):
+        Machine.identify(_run(cols, "dead.csv"))
+
+
 def test_cli_init_writes_and_prints(tmp_path, capsys):
     c = syn.make_case("lathe", "none", 1, hours=HOURS, dt=DT_S)
     run = tmp_path / "run.csv"

@@ -903,7 +903,7 @@ fn cluster(
 /// Identifies a starting network from a run (module docs).
 pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let file = run.source.clone();
-    let ck = check_input(run, opts)?;
+    let mut ck = check_input(run, opts)?;
     let view = RunView::new(run);
     let n = run.time_s.len();
     let frac = opts.train_fraction.clamp(0.1, 1.0);
@@ -921,7 +921,50 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         let cols: Vec<&[f64]> = names.iter().map(|c| view.col(c)).collect::<Result<_>>()?;
         crate::guard::suspect_readings(&file, &names, &cols, &run.time_s)
     };
-    for sp in &suspect_readings {
+    // a probe that reads one value in every row has no drift to map (its map would be zeros,
+    // and every diagnosis would leave it out): every axis (no `--axis`) goes on without it, as
+    // the diagnosis of every axis does; named, it is refused, as the diagnosis of it is
+    let mut left_out = Vec::new();
+    let dead: Vec<&crate::guard::Suspect> = suspect_readings
+        .iter()
+        .filter(|sp| sp.kind == crate::guard::SuspectKind::Constant && sp.column.starts_with("E_"))
+        .collect();
+    if !dead.is_empty() {
+        let said = |sp: &crate::guard::Suspect| {
+            sp.text
+                .split(": a dead or disconnected")
+                .next()
+                .unwrap_or(&sp.text)
+                .to_string()
+        };
+        if !opts.axes.is_empty() || dead.len() == ck.axes.len() {
+            let what: Vec<String> = dead.iter().map(|sp| said(sp)).collect();
+            return Err(Error::Shape(format!(
+                "{}: the probe does not move, no drift to map; mend the probe{}",
+                what.join("; "),
+                if dead.len() == ck.axes.len() {
+                    ""
+                } else {
+                    ", or leave the axis out"
+                }
+            )));
+        }
+        for sp in &dead {
+            left_out.push(sp.column.clone());
+            notes.push(format!(
+                "{} left out of the file: {}: the probe does not move, no drift to map (mend \
+                 the probe and run init again to map it)",
+                sp.column,
+                said(sp)
+            ));
+        }
+        ck.axes.retain(|a| !dead.iter().any(|sp| &sp.column == a));
+    }
+    // readings the run makes suspect, but for an axis left out (its line above says it)
+    for sp in suspect_readings
+        .iter()
+        .filter(|sp| !left_out.contains(&sp.column))
+    {
         notes.push(format!("suspect reading: {}", sp.text));
     }
     // a temperature that jumps (an open thermocouple, a loose cable) is no room and no node's
