@@ -64,6 +64,33 @@ def test_bad_input_is_one_line(example_run1, tmp_path, capsys):
     assert not (tmp_path / "m.json").exists()
 
 
+def test_a_dead_probe_is_not_modelled(example_run1, tmp_path, capsys):
+    """A probe that reads one value in every row (unplugged): before, `thermerr fit` wrote a
+    model that "compensated" 100 % of its offset (RMS 12.5 -> 0 µm on the real run's E_ch4 set
+    to 12.5). Now it is refused, one line naming the file and the probe, exit 2, nothing
+    written; Python's fit_run raises the same."""
+    from thermerr_rs.errors import ShapeError
+
+    lines = example_run1.read_text().splitlines()
+    col = lines[0].split(",").index("E_z")
+    rows = [ln.split(",") for ln in lines[1:]]
+    for r in rows:
+        r[col] = "12.5"
+    p = tmp_path / "dead.csv"
+    p.write_text("\n".join([lines[0]] + [",".join(r) for r in rows]) + "\n")
+    out = tmp_path / "m.json"
+    assert main(["fit", str(p), "--axis", "E_z", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err == [f"thermerr: error: {p}: E_z reads one value (12.5) in every row "
+                   f"({float(rows[-1][0]) - float(rows[0][0]):.0f} s): the probe does not move, nothing to model; "
+                   "mend the probe"], err
+    assert not out.exists()
+    run = tr.read_run(p)
+    with pytest.raises(ShapeError, match="E_z reads one value"):
+        tr.MLR().fit_run(run, "E_z", run.temperatures)
+    tr.MLR().fit_run(run, "E_x", run.temperatures)  # the other probe moves
+
+
 def test_a_warning_is_one_line(example_run1, tmp_path):
     """A column the reader ignores is said on one line, as an error is, not with Python's file,
     line number and source line (seen on a logger's export with a comment column)."""

@@ -10,7 +10,7 @@ import numpy as np
 
 from . import _core
 from ._arrays import F64
-from .errors import DataError, MissingColumnError, ParameterError
+from .errors import DataError, MissingColumnError, ParameterError, ShapeError
 
 NanPolicy = Literal["error", "drop", "interpolate"]
 
@@ -164,7 +164,9 @@ class Run:
         """Checks the columns of a fit before anything is computed: the
         target is an error (``E_*``) column and no input is an error column (a model fitted with
         its own target, or another probe's error, among its inputs looks perfect and compensates
-        nothing). Every ``fit_run`` goes through here."""
+        nothing), and the target moves: a probe that reads one value in every row (dead,
+        unplugged) has no drift, and a model of it would report a perfect compensation of
+        nothing. Every ``fit_run`` goes through here."""
         if not target.startswith("E_"):
             raise ParameterError(f"{self.source}: the target `{target}` is not an error column (E_*); "
                                  f"error columns are: {', '.join(self.errors) or 'none'}")
@@ -176,6 +178,10 @@ class Run:
             raise ParameterError(f"{self.source}: no input columns given")
         for name in [target, *features]:
             self[name]  # raises MissingColumnError naming the column and the file
+        dead = _core.dead_probe(self.source, target, np.ascontiguousarray(self[target], dtype=np.float64),
+                                np.ascontiguousarray(self.time_s, dtype=np.float64))
+        if dead is not None:
+            raise ShapeError(f"{dead}, nothing to model; mend the probe")
 
     def input_matrix(self, features: list[str], form: str = "absolute", reference: Run | None = None) -> F64:
         """The model inputs built from the named columns: ``form="absolute"`` the readings as

@@ -858,6 +858,19 @@ impl Suspect {
         }
     }
 
+    /// A probe (`E_*`) that reads one value in every row, in one line naming the run and the
+    /// probe ("run.csv: E_ch4 reads one value (12.5) in every row (166710 s): the probe does not
+    /// move"); `None` for any other suspect. It has no drift to model, map or diagnose: the one
+    /// rule by which `thermerr fit` refuses it, `thermerr init` leaves it out and the diagnosis
+    /// of every axis skips it.
+    pub fn dead_probe(&self) -> Option<String> {
+        if self.kind != SuspectKind::Constant || !self.column.starts_with("E_") {
+            return None;
+        }
+        let what = self.text.split(": a dead or disconnected").next()?;
+        Some(format!("{what}: the probe does not move"))
+    }
+
     /// What shows the column failing, in words: its jumps ([`Suspect::jumps`]), or "reads one
     /// value in every row (166710 s)".
     pub fn fault(&self) -> String {

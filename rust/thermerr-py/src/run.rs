@@ -101,6 +101,23 @@ fn not_a_number(column: &str, cell: &str) -> String {
     thermerr_core::run::not_a_number(column, cell)
 }
 
+/// The line saying that probe `name` of run `source` reads one value in every row
+/// (`thermerr_core::guard::Suspect::dead_probe`), or None.
+#[pyfunction]
+fn dead_probe<'py>(
+    source: &str,
+    name: &str,
+    values: PyReadonlyArray1<'py, f64>,
+    time: PyReadonlyArray1<'py, f64>,
+) -> PyResult<Option<String>> {
+    let (v, t) = (slice1(&values)?, slice1(&time)?);
+    Ok(
+        thermerr_core::guard::suspect_readings(source, &[name], &[v], t)
+            .iter()
+            .find_map(thermerr_core::guard::Suspect::dead_probe),
+    )
+}
+
 /// Predictions shaped into CNC offsets (`thermerr_core::shape`), from a fresh state: `spec` in
 /// the text form `limit=50,rate=2,deadband=0.5,unit=0.1,bits=16`.
 #[pyfunction]
@@ -151,6 +168,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(iso_seconds, m)?)?;
     m.add_function(wrap_pyfunction!(is_data_column, m)?)?;
     m.add_function(wrap_pyfunction!(not_a_number, m)?)?;
+    m.add_function(wrap_pyfunction!(dead_probe, m)?)?;
     m.add_function(wrap_pyfunction!(scores, m)?)?;
     m.add_function(wrap_pyfunction!(shape_series, m)?)?;
     Ok(())

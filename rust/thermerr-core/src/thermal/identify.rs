@@ -925,22 +925,15 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     // and every diagnosis would leave it out): every axis (no `--axis`) goes on without it, as
     // the diagnosis of every axis does; named, it is refused, as the diagnosis of it is
     let mut left_out = Vec::new();
-    let dead: Vec<&crate::guard::Suspect> = suspect_readings
+    let dead: Vec<(&str, String)> = suspect_readings
         .iter()
-        .filter(|sp| sp.kind == crate::guard::SuspectKind::Constant && sp.column.starts_with("E_"))
+        .filter_map(|sp| sp.dead_probe().map(|d| (sp.column.as_str(), d)))
         .collect();
     if !dead.is_empty() {
-        let said = |sp: &crate::guard::Suspect| {
-            sp.text
-                .split(": a dead or disconnected")
-                .next()
-                .unwrap_or(&sp.text)
-                .to_string()
-        };
         if !opts.axes.is_empty() || dead.len() == ck.axes.len() {
-            let what: Vec<String> = dead.iter().map(|sp| said(sp)).collect();
+            let what: Vec<&str> = dead.iter().map(|(_, d)| d.as_str()).collect();
             return Err(Error::Shape(format!(
-                "{}: the probe does not move, no drift to map; mend the probe{}",
+                "{}, no drift to map; mend the probe{}",
                 what.join("; "),
                 if dead.len() == ck.axes.len() {
                     ""
@@ -949,16 +942,14 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
                 }
             )));
         }
-        for sp in &dead {
-            left_out.push(sp.column.clone());
+        for (col, d) in &dead {
+            left_out.push(col.to_string());
             notes.push(format!(
-                "{} left out of the file: {}: the probe does not move, no drift to map (mend \
-                 the probe and run init again to map it)",
-                sp.column,
-                said(sp)
+                "{col} left out of the file: {d}, no drift to map (mend the probe and run init \
+                 again to map it)"
             ));
         }
-        ck.axes.retain(|a| !dead.iter().any(|sp| &sp.column == a));
+        ck.axes.retain(|a| !dead.iter().any(|(c, _)| c == a));
     }
     // readings the run makes suspect, but for an axis left out (its line above says it)
     for sp in suspect_readings

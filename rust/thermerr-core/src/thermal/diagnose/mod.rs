@@ -1033,18 +1033,12 @@ fn unusable_axis(
     suspects: &[Suspect],
 ) -> Result<Option<String>> {
     let axis = held.axis;
-    if let Some(sp) = suspects
+    if let Some(dead) = suspects
         .iter()
-        .find(|sp| sp.column == axis && sp.kind == crate::guard::SuspectKind::Constant)
+        .filter(|sp| sp.column == axis)
+        .find_map(Suspect::dead_probe)
     {
-        let what = sp
-            .text
-            .split(": a dead or disconnected")
-            .next()
-            .unwrap_or(&sp.text);
-        return Ok(Some(format!(
-            "{what}: the probe does not move, nothing to diagnose"
-        )));
+        return Ok(Some(format!("{dead}, nothing to diagnose")));
     }
     let (run, from) = (held.run, held.from);
     let tg = targets(m, run, axis)?;
