@@ -317,6 +317,50 @@ def test_a_dead_probe_is_left_out_of_every_axis_and_refused_by_name(tmp_path, ca
         Machine.identify(_run(cols, "dead.csv"))
 
 
+def test_inputs_that_heat_are_the_ones_named(tmp_path, capsys):
+    """A log with a U_* column that heats nothing (a random on/off state, independent of the
+    spindle): by default it is taken as a heat input like every U_* column (on the real 46-h
+    run such a column was given sources on three of the five nodes and moved the spindle's),
+    and a note says so; named with --input, the others are the heat inputs and the file is the
+    one of the run without that column. An input the run lacks, or given twice, is one line,
+    exit 2, nothing written."""
+    c = syn.make_case("lathe", "none", 1, hours=HOURS, dt=DT_S)
+    cols = dict(c.train)
+    rng = np.random.default_rng(7)
+    flips = np.sort(rng.uniform(0, cols["time_s"][-1], 8))
+    cols["U_program"] = (np.searchsorted(flips, cols["time_s"]) % 2).astype(float)
+    run = tmp_path / "run.csv"
+    syn.write_run_csv(run, cols)
+    out = tmp_path / "m.toml"
+    assert main(["init", str(run), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "note: inputs: every U_* column is taken as a heat input (U_spindle_rpm, U_feed_mm_min, U_program)" in text
+    named = ["--input", "U_spindle_rpm", "--input", "U_feed_mm_min"]
+    assert main(["init", str(run), "--out", str(out), *named]) == 0
+    text = capsys.readouterr().out
+    assert "note: inputs: U_spindle_rpm, U_feed_mm_min (given); not taken as heat inputs: U_program" in text
+    assert "U_program" not in [s["input"] for s in Machine.load(out).to_dict()["sources"]]
+    without = tmp_path / "without.csv"
+    syn.write_run_csv(without, {k: v for k, v in cols.items() if k != "U_program"})
+    assert main(["init", str(without), "--out", str(tmp_path / "w.toml")]) == 0
+    capsys.readouterr()
+
+    def body(p):
+        return [ln for ln in p.read_text().splitlines() if not ln.startswith(("#", "name", "source", "run ="))]
+
+    assert body(out) == body(tmp_path / "w.toml")
+    for args, says in ((["--input", "U_spindle"], "input `U_spindle`: not an input column of the run "
+                        "(U_* columns: U_spindle_rpm, U_feed_mm_min, U_program)"),
+                       (["--input", "U_program", "--input", "U_program"], "input `U_program`: given twice")):
+        bad = tmp_path / "bad.toml"
+        assert main(["init", str(run), "--out", str(bad), *args]) == 2
+        err = [x for x in capsys.readouterr().err.splitlines() if x.startswith("thermerr: error:")]
+        assert len(err) == 1 and str(run) in err[0] and says in err[0], err
+        assert not bad.exists()
+    m, s = Machine.identify(_run(cols, "run.csv"), inputs="U_spindle_rpm")
+    assert {x["input"] for x in m.to_dict()["sources"]} == {"U_spindle_rpm"}
+
+
 def test_cli_init_writes_and_prints(tmp_path, capsys):
     c = syn.make_case("lathe", "none", 1, hours=HOURS, dt=DT_S)
     run = tmp_path / "run.csv"

@@ -147,6 +147,7 @@ class MachineModel:
         axes: list[str] | None = None,
         nodes: int | None = None,
         ambient: str | None = None,
+        inputs: list[str] | None = None,
         train_fraction: float = 0.7,
         seed: int = 0,
         max_iter: int = 100,

@@ -499,7 +499,8 @@ def cmd_init(args: argparse.Namespace) -> int:
     _check_out(args.out, args.run)
     run = _read(args, args.run)
     _stage(args, f"identifying a thermal network from {run.source} ...")
-    _, s = Machine.identify(run, args.axis, nodes=args.nodes, ambient=args.ambient, seed=args.seed)
+    _, s = Machine.identify(run, args.axis, nodes=args.nodes, ambient=args.ambient, inputs=args.input,
+                            seed=args.seed)
     write_atomic(args.out, s["toml"])
     if args.json:
         _print_json({k: v for k, v in s.items() if k != "toml"} | {"out": args.out})
@@ -832,6 +833,9 @@ def build_parser() -> argparse.ArgumentParser:
     ini.add_argument("--nodes", type=_positive_int, default=None,
                      help="number of nodes (default: the smallest Xie-Beni index over 2-5)")
     ini.add_argument("--ambient", default=None, help="the ambient column (default: T_ambient, else the coldest)")
+    ini.add_argument("--input", action="append", default=None, metavar="U_COL",
+                     help="an input that heats the machine, repeatable (default: every U_* column; "
+                          "name the real heat inputs when the log carries others, e.g. a program number)")
     ini.add_argument("--seed", type=int, default=0, help="seed of the fuzzy c-means start (default 0)")
     common(ini)
     ini.set_defaults(func=cmd_init)

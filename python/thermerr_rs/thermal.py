@@ -63,7 +63,8 @@ class Machine:
 
     @classmethod
     def identify(cls, run: Run, axes: str | list[str] | None = None, *, nodes: int | None = None,
-                 ambient: str | None = None, train_fraction: float = 0.7, seed: int = 0,
+                 ambient: str | None = None, inputs: str | list[str] | None = None,
+                 train_fraction: float = 0.7, seed: int = 0,
                  max_iter: int = 100) -> tuple[Machine, dict[str, Any]]:
         """Identify a starting network from a run alone (docs/machine-model.md, "Starting from
         data"): pick the ambient, group the other sensors into nodes by fuzzy c-means, place the
@@ -91,12 +92,18 @@ class Machine:
         makes suspect, as in a diagnosis's report; also warned as
         :class:`~thermerr_rs.errors.SuspectReadingWarning`) and
         ``toml``, the file with a comment on every choice (what ``thermerr init`` writes).
-        Bad input (no ``T_*`` column, no ``E_*`` axis, an unknown ``ambient``, more ``nodes``
+        ``inputs``: the ``U_*`` columns that heat the machine (default every one; a column that
+        heats nothing, a program number or a tool number, would be given heat sources all the
+        same, since a run's temperatures cannot tell it from a heat source that moves with the
+        spindle: name the real ones).
+        Bad input (no ``T_*`` column, no ``E_*`` axis, an unknown ``ambient`` or input, more ``nodes``
         than sensors) raises a :class:`~thermerr_rs.errors.DataError` naming the run and the entry.
         """
         ax = [axes] if isinstance(axes, str) else (list(axes) if axes is not None else None)
+        ins = [inputs] if isinstance(inputs, str) else (list(inputs) if inputs is not None else None)
         inner, summary = _core.MachineModel.identify(*_run_args(run), axes=ax, nodes=nodes, ambient=ambient,
-                                                     train_fraction=train_fraction, seed=seed, max_iter=max_iter)
+                                                     inputs=ins, train_fraction=train_fraction, seed=seed,
+                                                     max_iter=max_iter)
         s: dict[str, Any] = json.loads(summary)
         _warn_suspects(sp["text"] for sp in s["suspect_readings"])
         return cls(inner), s

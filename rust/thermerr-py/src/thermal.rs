@@ -186,7 +186,7 @@ impl PyMachine {
     /// Identifies a starting network from a run (thermal::identify); returns the machine and
     /// the summary as JSON text (its `toml` field is the commented file).
     #[staticmethod]
-    #[pyo3(signature = (source, time, names, data, *, axes = None, nodes = None, ambient = None, train_fraction = 0.7, seed = 0, max_iter = 100))]
+    #[pyo3(signature = (source, time, names, data, *, axes = None, nodes = None, ambient = None, inputs = None, train_fraction = 0.7, seed = 0, max_iter = 100))]
     #[allow(clippy::too_many_arguments)]
     fn identify<'py>(
         py: Python<'py>,
@@ -197,6 +197,7 @@ impl PyMachine {
         axes: Option<Vec<String>>,
         nodes: Option<usize>,
         ambient: Option<String>,
+        inputs: Option<Vec<String>>,
         train_fraction: f64,
         seed: u64,
         max_iter: usize,
@@ -206,6 +207,7 @@ impl PyMachine {
             axes: axes.unwrap_or_default(),
             nodes,
             ambient,
+            inputs: inputs.unwrap_or_default(),
             train_fraction,
             seed,
             max_iter,

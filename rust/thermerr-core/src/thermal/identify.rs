@@ -167,6 +167,12 @@ pub struct IdentifyOptions {
     pub nodes: Option<usize>,
     /// The ambient column (None: `T_ambient`, else the coldest column).
     pub ambient: Option<String>,
+    /// The inputs that heat the machine (empty: every `U_*` column of the run). A run's log
+    /// may carry `U_*` columns that heat nothing (a program number, a tool number); the
+    /// temperatures of a run of hours cannot tell such a column from a heat source that moves
+    /// with the spindle (a blocked cross-validation of the first-order fits, tried on
+    /// 2026-11-28, kept a random on/off column as often as a real feed), so the user says.
+    pub inputs: Vec<String>,
     /// Share of the rows used for training; the rest is held out.
     pub train_fraction: f64,
     pub max_nodes: usize,
@@ -180,6 +186,7 @@ impl Default for IdentifyOptions {
             axes: Vec::new(),
             nodes: None,
             ambient: None,
+            inputs: Vec::new(),
             train_fraction: 0.7,
             max_nodes: 5,
             seed: 0,
@@ -660,7 +667,29 @@ fn check_input<'a>(run: &'a Run, opts: &IdentifyOptions) -> Result<Checked<'a>> 
             .map(String::as_str)
             .collect()
     };
-    let (temps, inputs, errs) = (with("T_"), with("U_"), with("E_"));
+    let (temps, mut inputs, errs) = (with("T_"), with("U_"), with("E_"));
+    if !opts.inputs.is_empty() {
+        for (k, u) in opts.inputs.iter().enumerate() {
+            if !inputs.contains(&u.as_str()) {
+                return Err(bad(
+                    file,
+                    format!("input `{u}`"),
+                    format!(
+                        "not an input column of the run (U_* columns: {})",
+                        if inputs.is_empty() {
+                            "none".to_string()
+                        } else {
+                            inputs.join(", ")
+                        }
+                    ),
+                ));
+            }
+            if opts.inputs[..k].contains(u) {
+                return Err(bad(file, format!("input `{u}`"), "given twice"));
+            }
+        }
+        inputs.retain(|c| opts.inputs.iter().any(|u| u == c));
+    }
     if temps.is_empty() {
         return Err(bad(
             file,
@@ -950,6 +979,27 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             ));
         }
         ck.axes.retain(|a| !dead.iter().any(|(c, _)| c == a));
+    }
+    // the inputs taken as heat sources: every `U_*` column unless the user named them
+    let unused: Vec<&str> = run
+        .names
+        .iter()
+        .map(String::as_str)
+        .filter(|c| c.starts_with("U_") && !ck.inputs.contains(c))
+        .collect();
+    if !unused.is_empty() {
+        notes.push(format!(
+            "inputs: {} (given); not taken as heat inputs: {}",
+            ck.inputs.join(", "),
+            unused.join(", ")
+        ));
+    } else if ck.inputs.len() > 1 {
+        notes.push(format!(
+            "inputs: every U_* column is taken as a heat input ({}); a column that heats \
+             nothing (a program number, a tool number) would be given heat sources all the same, \
+             so name the real ones with --input (inputs= in Python) if the log carries others",
+            ck.inputs.join(", ")
+        ));
     }
     // readings the run makes suspect, but for an axis left out (its line above says it)
     for sp in suspect_readings
