@@ -361,6 +361,33 @@ def test_inputs_that_heat_are_the_ones_named(tmp_path, capsys):
     assert {x["input"] for x in m.to_dict()["sources"]} == {"U_spindle_rpm"}
 
 
+@pytest.mark.filterwarnings("ignore:shop.csv. T_t17 repeats one reading")  # the 0.1-K logger's, said
+def test_a_chilled_coolant_is_not_the_room_and_a_room_is_known_by_its_name():
+    """A spindle chiller's coolant at 18 °C, colder than the shop and cycling ±0.4 K every
+    15 min with its control loop: the coldest rule took it for the room, and on the real 46-h run
+    init then stopped ("no temperature warms with any input"). A column that cycles within the
+    hour is passed over (and said), and the room is the coldest of the rest; a steady room on a
+    0.1-K logger, which varies by its noise alone, is not passed over. A column named as the
+    room (T_room, T_Amb, ...) is the ambient by its name."""
+    c = syn.make_shop_case(1, hours=24.0, dt=60.0)  # (on 12 h the rule takes T_t13, a part)
+    cols = dict(c.train)
+    t = cols["time_s"]
+    rng = np.random.default_rng(3)
+    _, plain = Machine.identify(_run(cols, "shop.csv"))
+    assert plain["ambient"]["column"] == "T_t6" and plain["ambient"]["rule"] == "coldest"
+    cooled = dict(cols, T_t17=18.0 + 0.4 * np.sin(2 * np.pi * t / 900.0) + rng.normal(0, 0.02, len(t)))
+    _, s = Machine.identify(_run(cooled, "shop.csv"))
+    assert s["ambient"]["column"] == "T_t6", s["ambient"]
+    assert "T_t17 is colder in 100 % of them, but it cycles within the hour" in s["ambient"]["reason"]
+    # the room held by a climate control and logged at 0.1 K: its noise is all it shows
+    steady = dict(cooled, T_t17=np.round(20.0 + rng.normal(0, 0.03, len(t)), 1))
+    _, s = Machine.identify(_run(steady, "shop.csv"))
+    assert s["ambient"]["column"] == "T_t17", s["ambient"]
+    named = {("T_Room" if k == "T_t6" else k): v for k, v in cols.items()}
+    _, s = Machine.identify(_run(named, "shop.csv"))
+    assert s["ambient"]["column"] == "T_Room" and s["ambient"]["rule"] == "named"
+
+
 def test_cli_init_writes_and_prints(tmp_path, capsys):
     c = syn.make_case("lathe", "none", 1, hours=HOURS, dt=DT_S)
     run = tmp_path / "run.csv"
