@@ -821,7 +821,17 @@ pub enum SuspectKind {
     /// ([`probe_offset`]): a raw reading, not an error from the run's start. It is taken from
     /// its first reading (`size`: that reading, µm).
     Offset,
+    /// A probe that moves, but by less than [`SCALE_FLOOR_UM`] over the whole run (`size`: its
+    /// range): error columns are in µm (formats.md) and a machine's thermal drift is microns to
+    /// tens of microns, so a probe logged in mm (hundredths) looks like this. Said, not changed.
+    Scale,
 }
+
+/// A probe whose whole range over the run is below this (µm), but not zero, is said to be in
+/// the wrong unit ([`SuspectKind::Scale`]): less than a probe's own noise (0.15-0.3 µm on the
+/// synthetic runs, whose drift ranges over 3 µm and more; the real 46-h run's probes over
+/// 20-90 µm), and what the real run reads in mm (0.013-0.09).
+pub const SCALE_FLOOR_UM: f64 = 0.5;
 
 /// Readings of a run that the run itself makes suspect. A run to be diagnosed or identified has
 /// no clean training run to learn a [`Guard`]'s limits from, so each column is judged against
@@ -1003,6 +1013,24 @@ pub fn suspect_readings(
             });
         }
         if name.starts_with("E_") {
+            let (lo, hi) = col
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
+            if hi > lo && hi - lo < SCALE_FLOOR_UM {
+                out.push(Suspect {
+                    column: name.to_string(),
+                    kind: SuspectKind::Scale,
+                    row: 1,
+                    count: 1,
+                    size: hi - lo,
+                    text: format!(
+                        "{source}: {name} moves by {:.4} over the whole run: error columns are in µm (formats.md), and a machine's thermal drift is microns to tens of microns; a probe logged in mm moves by hundredths. If so, multiply the column by 1000; the run is used as read",
+                        hi - lo
+                    ),
+                });
+            }
             if let Some(v) = probe_offset(col, &failing) {
                 out.push(Suspect {
                     column: name.to_string(),

@@ -625,3 +625,33 @@ fn a_probe_that_does_not_start_at_zero_is_taken_from_its_first_reading() {
     assert_eq!(probe_offset(&w, &first_five), None);
     assert_eq!(probe_offset(&y, &first_five), Some(y[5]));
 }
+
+#[test]
+fn a_probe_that_moves_by_less_than_a_micron_is_said_to_be_in_another_unit() {
+    let (t, y) = warming(960);
+    // the same drift from the run's start, in µm (moves 5 µm) and in mm (moves 0.005)
+    let um: Vec<f64> = y.iter().map(|v| v - y[0]).collect();
+    let mm: Vec<f64> = um.iter().map(|v| v / 1000.0).collect();
+    assert!(suspect_readings("run.csv", &["E_a"], &[&um], &t).is_empty());
+    let s = suspect_readings("run.csv", &["E_a"], &[&mm], &t);
+    assert_eq!(s.len(), 1, "{s:?}");
+    let range = mm.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+        - mm.iter().cloned().fold(f64::INFINITY, f64::min);
+    assert_eq!((s[0].kind, s[0].size), (SuspectKind::Scale, range));
+    assert!(!s[0].fails() && s[0].dead_probe().is_none());
+    assert!(
+        s[0].text.starts_with(&format!(
+            "run.csv: E_a moves by {range:.4} over the whole run"
+        )) && s[0].text.contains("multiply the column by 1000"),
+        "{}",
+        s[0].text
+    );
+    // a temperature in its units is no probe; a probe that does not move at all is a constant
+    assert!(suspect_readings("run.csv", &["T_a"], &[&mm], &t).is_empty());
+    let flat = vec![0.0; t.len()];
+    let s = suspect_readings("run.csv", &["E_a"], &[&flat], &t);
+    assert_eq!(
+        s.iter().map(|x| x.kind).collect::<Vec<_>>(),
+        vec![SuspectKind::Constant]
+    );
+}
