@@ -658,6 +658,20 @@ struct Checked<'a> {
     axes: Vec<String>,
 }
 
+/// A name given for `entry` that is not among the run's `kind` columns (`prefix`): "not an
+/// input column of the run (U_* columns: U_a, U_b)".
+fn not_one_of(file: &str, entry: String, kind: &str, prefix: &str, cols: &[&str]) -> Error {
+    let list = match cols.is_empty() {
+        true => "none".to_string(),
+        false => cols.join(", "),
+    };
+    bad(
+        file,
+        entry,
+        format!("not {kind} column of the run ({prefix} columns: {list})"),
+    )
+}
+
 fn check_input<'a>(run: &'a Run, opts: &IdentifyOptions) -> Result<Checked<'a>> {
     let file = run.source.as_str();
     let with = |p: &str| -> Vec<&'a str> {
@@ -671,17 +685,12 @@ fn check_input<'a>(run: &'a Run, opts: &IdentifyOptions) -> Result<Checked<'a>> 
     if !opts.inputs.is_empty() {
         for (k, u) in opts.inputs.iter().enumerate() {
             if !inputs.contains(&u.as_str()) {
-                return Err(bad(
+                return Err(not_one_of(
                     file,
                     format!("input `{u}`"),
-                    format!(
-                        "not an input column of the run (U_* columns: {})",
-                        if inputs.is_empty() {
-                            "none".to_string()
-                        } else {
-                            inputs.join(", ")
-                        }
-                    ),
+                    "an input",
+                    "U_*",
+                    &inputs,
                 ));
             }
             if opts.inputs[..k].contains(u) {
@@ -709,17 +718,12 @@ fn check_input<'a>(run: &'a Run, opts: &IdentifyOptions) -> Result<Checked<'a>> 
     } else {
         for a in &opts.axes {
             if !a.starts_with("E_") || !errs.contains(&a.as_str()) {
-                return Err(bad(
+                return Err(not_one_of(
                     file,
                     format!("axis `{a}`"),
-                    format!(
-                        "not an error column of the run (E_* columns: {})",
-                        if errs.is_empty() {
-                            "none".to_string()
-                        } else {
-                            errs.join(", ")
-                        }
-                    ),
+                    "an error",
+                    "E_*",
+                    &errs,
                 ));
             }
         }
@@ -727,13 +731,12 @@ fn check_input<'a>(run: &'a Run, opts: &IdentifyOptions) -> Result<Checked<'a>> 
     };
     if let Some(a) = &opts.ambient {
         if !temps.contains(&a.as_str()) {
-            return Err(bad(
+            return Err(not_one_of(
                 file,
                 format!("ambient `{a}`"),
-                format!(
-                    "not a temperature column of the run (T_* columns: {})",
-                    temps.join(", ")
-                ),
+                "a temperature",
+                "T_*",
+                &temps,
             ));
         }
     }
