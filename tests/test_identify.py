@@ -340,6 +340,9 @@ def test_inputs_that_heat_are_the_ones_named(tmp_path, capsys):
     text = capsys.readouterr().out
     assert "note: inputs: U_spindle_rpm, U_feed_mm_min (given); not taken as heat inputs: U_program" in text
     assert "U_program" not in [s["input"] for s in Machine.load(out).to_dict()["sources"]]
+    # every one named: no note asking to name them
+    assert main(["init", str(run), "--out", str(tmp_path / "all.toml"), *named, "--input", "U_program"]) == 0
+    assert "note: inputs" not in capsys.readouterr().out
     without = tmp_path / "without.csv"
     syn.write_run_csv(without, {k: v for k, v in cols.items() if k != "U_program"})
     assert main(["init", str(without), "--out", str(tmp_path / "w.toml")]) == 0

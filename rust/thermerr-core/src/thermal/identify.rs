@@ -1090,7 +1090,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             ck.inputs.join(", "),
             unused.join(", ")
         ));
-    } else if ck.inputs.len() > 1 {
+    } else if opts.inputs.is_empty() && ck.inputs.len() > 1 {
         notes.push(format!(
             "inputs: every U_* column is taken as a heat input ({}); a column that heats \
              nothing (a program number, a tool number) would be given heat sources all the same, \
