@@ -804,7 +804,7 @@ fn diagnose_on(
             hold.map_or(train.source.as_str(), |h| h.source.as_str())
         )));
     }
-    let suspect_readings = suspects(train, hold, &axis);
+    let suspect_readings = suspects(train, hold, &axis, true);
     let held = HeldOut {
         run: hold.unwrap_or(train),
         from: if hold.is_some() { 0 } else { split },
@@ -1073,11 +1073,19 @@ pub struct SkippedAxis {
 }
 
 /// The suspect readings of the training run and the separate held-out run (if any): their
-/// `T_*` columns and `axis`.
-fn suspects(train: &RunView<'_>, hold: Option<&RunView<'_>>, axis: &str) -> Vec<Suspect> {
+/// `T_*` columns (`temps`) and `axis`.
+fn suspects(
+    train: &RunView<'_>,
+    hold: Option<&RunView<'_>>,
+    axis: &str,
+    temps: bool,
+) -> Vec<Suspect> {
     let mut out = Vec::new();
     for v in std::iter::once(train).chain(hold) {
-        let mut names = v.cols_with_prefix("T_");
+        let mut names = match temps {
+            true => v.cols_with_prefix("T_"),
+            false => Vec::new(),
+        };
         names.sort();
         names.push(axis.to_string());
         let (names, cols): (Vec<&str>, Vec<&[f64]>) = names
@@ -1123,7 +1131,9 @@ pub fn diagnose_axes(
                 window: opts.init_window,
                 axis: a,
             };
-            why.push(unusable_axis(m, &held, &suspects(train, hold, a))?);
+            // the probe's own suspects are all the check reads: the temperatures' are left to
+            // each axis's diagnosis, which reports them
+            why.push(unusable_axis(m, &held, &suspects(train, hold, a, false))?);
         }
         if why.iter().all(Option::is_some) && !why.is_empty() {
             let lines: Vec<String> = why.into_iter().flatten().collect();
