@@ -183,6 +183,14 @@ impl Calibration {
     }
 }
 
+/// The least σ_e of a probe as a share of its span over the fitted rows ([`Reading::sigma`]).
+/// A floor keeps a quantised or smoothed probe (second differences of zero) from outweighing
+/// every temperature; as a share of the span it is the same whatever the probe's unit. An
+/// absolute 0.02 µm stood here before: a run logged in mm then weighed its probe a thousand
+/// times less than the same run in µm and gave another network (real 46-h run, E_ch3 held
+/// out 12.5 µm in µm, 5 µm in mm).
+pub const SIGMA_E_FLOOR_SHARE: f64 = 1e-3;
+
 /// Robust noise level of a series: MAD of second differences / (0.6745 · √6).
 pub fn noise_level(y: &[f64]) -> f64 {
     if y.len() < 3 {
@@ -665,6 +673,25 @@ impl<'a> Reading<'a> {
         }
         noise_level(&self.kept(&self.values, 0..rows))
     }
+
+    /// The probe's σ_e on the first `rows`: its noise level, at least [`SIGMA_E_FLOOR_SHARE`]
+    /// of its span over the fitted rows among them, so that the same run in another unit (mm,
+    /// nm) weighs its probe alike and gives the same network, its drift in that unit. A probe
+    /// that reads one value throughout: 1 (in its unit), any value weighing it alike.
+    pub fn sigma(&self, rows: usize) -> f64 {
+        let kept = self.kept(&self.values, 0..rows);
+        let (lo, hi) = kept
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            });
+        let s = noise_level(&kept).max(SIGMA_E_FLOOR_SHARE * (hi - lo));
+        if s > 0.0 && s.is_finite() {
+            s
+        } else {
+            1.0
+        }
+    }
 }
 
 /// A sensed node's reading in a run.
@@ -950,9 +977,7 @@ fn calibrate_all_rows(
         };
         mean.max(0.005)
     });
-    let sigma_e = opts
-        .sigma_e
-        .unwrap_or_else(|| tg.error.noise(rows).max(0.02));
+    let sigma_e = opts.sigma_e.unwrap_or_else(|| tg.error.sigma(rows));
     let free = free.unwrap_or_else(|| default_params(m, opts));
     let n_linear = {
         let d = &m.drift[tg.axis_index];

@@ -1852,7 +1852,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     // 15 µm RMS on a 46-h run.
     for ax in ck.axes.iter().skip(1) {
         let tg = targets(&machine, &view, ax)?;
-        let sigma_e = tg.error.noise(m).max(1e-3);
+        let sigma_e = tg.error.sigma(m);
         let (fitted, _, _) =
             evaluate(&machine, &cal.init, &view, &tg, m, 1.0, sigma_e, Some(None))?;
         machine = fitted;
