@@ -91,6 +91,37 @@ def test_a_dead_probe_is_not_modelled(example_run1, tmp_path, capsys):
     tr.MLR().fit_run(run, "E_x", run.temperatures)  # the other probe moves
 
 
+def test_a_probe_that_jumps_is_said_before_it_is_fitted(example_run1, tmp_path, capsys):
+    """A probe re-zeroed mid-run (the real run's E_ch3 40 µm lower from 30 h on): `thermerr fit`
+    fitted across the step without a word (RMS 7.3 µm where the run's own fit is lower). Now it
+    says so, one line naming the file, the probe and the first row, and fits as read (the user
+    decides where the run is right); Python's fit_run warns the same. A run without a step
+    says nothing."""
+    from thermerr_rs.errors import SuspectReadingWarning
+
+    lines = example_run1.read_text().splitlines()
+    col = lines[0].split(",").index("E_z")
+    rows = [ln.split(",") for ln in lines[1:]]
+    k = len(rows) * 2 // 3
+    for r in rows[k:]:
+        r[col] = repr(float(r[col]) - 40.0)
+    p = tmp_path / "rezero.csv"
+    p.write_text("\n".join([lines[0]] + [",".join(r) for r in rows]) + "\n")
+    out = tmp_path / "m.json"
+    assert main(["fit", str(p), "--axis", "E_z", "--model", "mlr", "--no-fallbacks", "--quiet",
+                 "--out", str(out)]) == 0
+    warned = [ln for ln in capsys.readouterr().err.splitlines() if "warning" in ln]
+    assert len(warned) == 1 and warned[0].startswith(f"thermerr: warning: {p}: E_z jumps by up to 40"), warned
+    assert f"first at row {k + 1})" in warned[0] and "learns the step as drift" in warned[0]
+    assert out.exists()
+    run = tr.read_run(p)
+    with pytest.warns(SuspectReadingWarning, match="E_z jumps"):
+        tr.MLR().fit_run(run, "E_z", run.temperatures)
+    assert main(["fit", str(example_run1), "--axis", "E_z", "--model", "mlr", "--no-fallbacks", "--quiet",
+                 "--out", str(tmp_path / "m2.json")]) == 0
+    assert "warning" not in capsys.readouterr().err
+
+
 def test_a_warning_is_one_line(example_run1, tmp_path):
     """A column the reader ignores is said on one line, as an error is, not with Python's file,
     line number and source line (seen on a logger's export with a comment column)."""

@@ -283,7 +283,11 @@ def cmd_fit(args: argparse.Namespace) -> int:
     run = _read(args, args.run)
     run[args.axis]
     sensors = _sensors(args, run)
-    run.check_fit_columns(args.axis, sensors)
+    with warnings.catch_warnings(record=True) as seen:  # the fits below check the same again
+        warnings.simplefilter("always", SuspectReadingWarning)
+        run.check_fit_columns(args.axis, sensors)
+    for w in seen:
+        print(f"thermerr: warning: {w.message}", file=sys.stderr)
     args._max_abs_error = float(abs(run[args.axis]).max())
     selection = None
     if args.model == "auto":

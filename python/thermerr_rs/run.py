@@ -10,7 +10,7 @@ import numpy as np
 
 from . import _core
 from ._arrays import F64
-from .errors import DataError, MissingColumnError, ParameterError, ShapeError
+from .errors import DataError, MissingColumnError, ParameterError, ShapeError, SuspectReadingWarning
 
 NanPolicy = Literal["error", "drop", "interpolate"]
 
@@ -166,7 +166,9 @@ class Run:
         its own target, or another probe's error, among its inputs looks perfect and compensates
         nothing), and the target moves: a probe that reads one value in every row (dead,
         unplugged) has no drift, and a model of it would report a perfect compensation of
-        nothing. Every ``fit_run`` goes through here."""
+        nothing. A target that jumps away (and back, or to the end: a probe re-zeroed or knocked)
+        is warned of (:class:`~thermerr_rs.errors.SuspectReadingWarning`) and fitted as read.
+        Every ``fit_run`` goes through here."""
         if not target.startswith("E_"):
             raise ParameterError(f"{self.source}: the target `{target}` is not an error column (E_*); "
                                  f"error columns are: {', '.join(self.errors) or 'none'}")
@@ -178,10 +180,12 @@ class Run:
             raise ParameterError(f"{self.source}: no input columns given")
         for name in [target, *features]:
             self[name]  # raises MissingColumnError naming the column and the file
-        dead = _core.dead_probe(self.source, target, np.ascontiguousarray(self[target], dtype=np.float64),
-                                np.ascontiguousarray(self.time_s, dtype=np.float64))
+        dead, failing = _core.probe_faults(self.source, target, np.ascontiguousarray(self[target], dtype=np.float64),
+                                           np.ascontiguousarray(self.time_s, dtype=np.float64))
         if dead is not None:
             raise ShapeError(f"{dead}, nothing to model; mend the probe")
+        if failing is not None:
+            warnings.warn(failing, SuspectReadingWarning, stacklevel=3)
 
     def input_matrix(self, features: list[str], form: str = "absolute", reference: Run | None = None) -> F64:
         """The model inputs built from the named columns: ``form="absolute"`` the readings as

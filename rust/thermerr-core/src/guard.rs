@@ -881,6 +881,21 @@ impl Suspect {
         Some(format!("{what}: the probe does not move"))
     }
 
+    /// The line saying that a probe's readings fail over some rows (a jump away, and back or
+    /// to the end: [`failing_rows`]), for a fit of that probe, which fits every row as read, so
+    /// that a re-zeroed or knocked probe's step enters the model as drift; or None.
+    pub fn failing_probe(&self) -> Option<String> {
+        if self.kind != SuspectKind::Jump || !self.column.starts_with("E_") {
+            return None;
+        }
+        let what = self.text.split(": a sensor fault").next()?;
+        Some(format!(
+            "{what}: a probe re-zeroed, knocked or loose? A model fitted on it learns the step \
+             as drift (every row is fitted as read): fit on the rows before it (cut the run there) or \
+             mend them"
+        ))
+    }
+
     /// What shows the column failing, in words: its jumps ([`Suspect::jumps`]), or "reads one
     /// value in every row (166710 s)".
     pub fn fault(&self) -> String {

@@ -101,21 +101,24 @@ fn not_a_number(column: &str, cell: &str) -> String {
     thermerr_core::run::not_a_number(column, cell)
 }
 
-/// The line saying that probe `name` of run `source` reads one value in every row
-/// (`thermerr_core::guard::Suspect::dead_probe`), or None.
+/// What makes probe `name` of run `source` unfit to be a fit's target: the line saying that it
+/// reads one value in every row (`thermerr_core::guard::Suspect::dead_probe`), and the line
+/// saying that it fails over some rows (`Suspect::failing_probe`); None for each that it does
+/// not.
 #[pyfunction]
-fn dead_probe<'py>(
+fn probe_faults<'py>(
     source: &str,
     name: &str,
     values: PyReadonlyArray1<'py, f64>,
     time: PyReadonlyArray1<'py, f64>,
-) -> PyResult<Option<String>> {
+) -> PyResult<(Option<String>, Option<String>)> {
+    use thermerr_core::guard::Suspect;
     let (v, t) = (slice1(&values)?, slice1(&time)?);
-    Ok(
-        thermerr_core::guard::suspect_readings(source, &[name], &[v], t)
-            .iter()
-            .find_map(thermerr_core::guard::Suspect::dead_probe),
-    )
+    let found = thermerr_core::guard::suspect_readings(source, &[name], &[v], t);
+    Ok((
+        found.iter().find_map(Suspect::dead_probe),
+        found.iter().find_map(Suspect::failing_probe),
+    ))
 }
 
 /// Predictions shaped into CNC offsets (`thermerr_core::shape`), from a fresh state: `spec` in
@@ -168,7 +171,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(iso_seconds, m)?)?;
     m.add_function(wrap_pyfunction!(is_data_column, m)?)?;
     m.add_function(wrap_pyfunction!(not_a_number, m)?)?;
-    m.add_function(wrap_pyfunction!(dead_probe, m)?)?;
+    m.add_function(wrap_pyfunction!(probe_faults, m)?)?;
     m.add_function(wrap_pyfunction!(scores, m)?)?;
     m.add_function(wrap_pyfunction!(shape_series, m)?)?;
     Ok(())
