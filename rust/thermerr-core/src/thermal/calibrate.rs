@@ -184,12 +184,14 @@ impl Calibration {
 }
 
 /// The least σ_e of a probe as a share of its span over the fitted rows ([`Reading::sigma`]).
-/// A floor keeps a quantised or smoothed probe (second differences of zero) from outweighing
-/// every temperature; as a share of the span it is the same whatever the probe's unit. An
-/// absolute 0.02 µm stood here before: a run logged in mm then weighed its probe a thousand
-/// times less than the same run in µm and gave another network (real 46-h run, E_ch3 held
-/// out 12.5 µm in µm, 5 µm in mm).
-pub const SIGMA_E_FLOOR_SHARE: f64 = 1e-3;
+/// A floor keeps a smoothed probe (second differences all but zero) from outweighing every
+/// temperature; as a share of the span it is the same whatever the probe's unit. An absolute
+/// 0.02 µm stood here before: a run logged in mm then weighed its probe a thousand times less
+/// than the same run in µm and gave another network (real 46-h run, E_ch3 held out 12.5 µm in
+/// µm, 5 µm in mm). A share of 10⁻³ bound on the real run's two probes that move 86 µm (0.087
+/// against their noise of 0.02-0.05 µm) and changed two diagnoses; 10⁻⁴ binds on none of its
+/// probes nor on the synthetic runs' (noise 0.15 µm).
+pub const SIGMA_E_FLOOR_SHARE: f64 = 1e-4;
 
 /// Robust noise level of a series: MAD of second differences / (0.6745 · √6).
 pub fn noise_level(y: &[f64]) -> f64 {
@@ -674,10 +676,13 @@ impl<'a> Reading<'a> {
         noise_level(&self.kept(&self.values, 0..rows))
     }
 
-    /// The probe's σ_e on the first `rows`: its noise level, at least [`SIGMA_E_FLOOR_SHARE`]
-    /// of its span over the fitted rows among them, so that the same run in another unit (mm,
-    /// nm) weighs its probe alike and gives the same network, its drift in that unit. A probe
-    /// that reads one value throughout: 1 (in its unit), any value weighing it alike.
+    /// The probe's σ_e on the first `rows`: its noise level, at least its resolution's
+    /// rounding noise (the smallest step between two readings / √12: a probe logged to 0.1 µm
+    /// on a slow drift has second differences of zero, and its readings are ±0.05 µm all the
+    /// same) and [`SIGMA_E_FLOOR_SHARE`] of its span over the fitted rows among them. Each
+    /// scales with the probe's unit, so the same run in mm or nm weighs its probe alike and
+    /// gives the same network, its drift in that unit. A probe that reads one value throughout:
+    /// 1 (in its unit), any value weighing it alike.
     pub fn sigma(&self, rows: usize) -> f64 {
         let kept = self.kept(&self.values, 0..rows);
         let (lo, hi) = kept
@@ -685,7 +690,19 @@ impl<'a> Reading<'a> {
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
                 (lo.min(v), hi.max(v))
             });
-        let s = noise_level(&kept).max(SIGMA_E_FLOOR_SHARE * (hi - lo));
+        let step = kept
+            .windows(2)
+            .map(|w| (w[1] - w[0]).abs())
+            .filter(|d| *d > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        let rounding = if step.is_finite() {
+            step / 12f64.sqrt()
+        } else {
+            0.0
+        };
+        let s = noise_level(&kept)
+            .max(rounding)
+            .max(SIGMA_E_FLOOR_SHARE * (hi - lo));
         if s > 0.0 && s.is_finite() {
             s
         } else {
@@ -1305,5 +1322,44 @@ mod tests {
         };
         assert_eq!(r.fitted_rows(25), 25 - 7 - 5);
         assert!(r.reads(4) && !r.reads(5) && !r.reads(11) && r.reads(12));
+    }
+
+    /// A probe logged to 0.1 µm on a slow drift (0.01 µm a row, so its readings step by 0.1
+    /// every tenth row): second differences of zero in most rows, a noise level of 0; its σ is
+    /// the rounding's, 0.1/√12 = 0.029 µm, and the same run in mm gives the same σ in mm.
+    /// A smooth probe with no repeated reading and no noise: 0.01 % of its span. One that
+    /// never moves: 1.
+    #[test]
+    fn sigma_of_a_rounded_a_smooth_and_a_still_probe() {
+        let rounded: Vec<f64> = (0..2000)
+            .map(|k| (k as f64 * 0.01 * 10.0).round() / 10.0)
+            .collect();
+        let r = Reading {
+            values: std::borrow::Cow::Borrowed(&rounded),
+            failing: Vec::new(),
+        };
+        assert_eq!(noise_level(&rounded), 0.0);
+        let s = r.sigma(2000);
+        assert!((s - 0.1 / 12f64.sqrt()).abs() < 1e-9, "{s}");
+        let mm: Vec<f64> = rounded.iter().map(|v| v / 1000.0).collect();
+        let r_mm = Reading {
+            values: std::borrow::Cow::Borrowed(&mm),
+            failing: Vec::new(),
+        };
+        assert!((r_mm.sigma(2000) * 1000.0 - s).abs() < 1e-9);
+        let smooth: Vec<f64> = (0..2000)
+            .map(|k| 20.0 * (k as f64 / 2000.0).powi(2))
+            .collect();
+        let r = Reading {
+            values: std::borrow::Cow::Borrowed(&smooth),
+            failing: Vec::new(),
+        };
+        let span = smooth[1999] - smooth[0];
+        assert!((r.sigma(2000) - SIGMA_E_FLOOR_SHARE * span).abs() < 1e-12);
+        let r = Reading {
+            values: std::borrow::Cow::Borrowed(&[3.0; 50]),
+            failing: Vec::new(),
+        };
+        assert_eq!(r.sigma(50), 1.0);
     }
 }
