@@ -583,19 +583,14 @@ fn fit_rolling(
             "the GM(1,N) windows are singular on this data (constant readings?)".into(),
         ));
     }
-    let range = |v: &mut dyn Iterator<Item = f64>| {
-        v.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-            (lo.min(x), hi.max(x))
-        })
-    };
     let mut gm_min = vec![0.0; k];
     let mut gm_max = vec![0.0; k];
     for j in 0..k {
-        let (lo, hi) = range(&mut feats.iter().skip(j).step_by(k).copied());
+        let (lo, hi) = crate::metrics::min_max(feats.iter().skip(j).step_by(k).copied());
         gm_min[j] = lo;
         gm_max[j] = hi;
     }
-    let (y_min, y_max) = range(&mut targets.iter().copied());
+    let (y_min, y_max) = crate::metrics::min_max(targets.iter().copied());
     let mut model = GreyBpModel {
         windows: windows.to_vec(),
         n_temps: m,

@@ -794,9 +794,7 @@ pub fn probe_offset(col: &[f64], failing: &[std::ops::Range<usize>]) -> Option<f
     // readings, tried, took in the drift of the run's first minutes instead (2 µm on the
     // simulated VMC at 120 s per reading, against 0.2 µm of noise)
     let start = right().next()?;
-    let (lo, hi) = right().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-        (a.min(v), b.max(v))
-    });
+    let (lo, hi) = crate::metrics::min_max(right());
     (start.abs() > hi - lo).then_some(start)
 }
 
@@ -1028,11 +1026,7 @@ pub fn suspect_readings(
             });
         }
         if name.starts_with("E_") {
-            let (lo, hi) = col
-                .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                    (a.min(v), b.max(v))
-                });
+            let (lo, hi) = crate::metrics::min_max(col.iter().copied());
             if hi > lo && hi - lo < SCALE_FLOOR_UM {
                 out.push(Suspect {
                     column: name.to_string(),

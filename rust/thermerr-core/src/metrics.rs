@@ -53,6 +53,15 @@ pub fn rms_of(v: impl Iterator<Item = f64>) -> f64 {
     }
 }
 
+/// The least and the greatest of a stream of values ((+∞, −∞) for none; a NaN is passed
+/// over, as `f64::min` and `f64::max` pass it over).
+pub fn min_max(v: impl IntoIterator<Item = f64>) -> (f64, f64) {
+    v.into_iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        })
+}
+
 /// Scores `predicted` against `measured`. `zero_tol` is the |e| at or below which a sample is left
 /// out of the mean accuracy; `None` takes 5 % of max |e|.
 pub fn scores(measured: &[f64], predicted: &[f64], zero_tol: Option<f64>) -> Result<Scores> {

@@ -136,11 +136,7 @@ impl Preprocessing {
                 if y.is_empty() {
                     return Err(Error::Shape("minmax_ago needs the target".into()));
                 }
-                let (y_min, y_max) = y
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
-                        (a.min(v), b.max(v))
-                    });
+                let (y_min, y_max) = crate::metrics::min_max(y.iter().copied());
                 Ok(Preprocessing::MinmaxAgo {
                     x_min: lo,
                     x_max: hi,

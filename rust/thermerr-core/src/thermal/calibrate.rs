@@ -685,11 +685,7 @@ impl<'a> Reading<'a> {
     /// 1 (in its unit), any value weighing it alike.
     pub fn sigma(&self, rows: usize) -> f64 {
         let kept = self.kept(&self.values, 0..rows);
-        let (lo, hi) = kept
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &v| {
-                (lo.min(v), hi.max(v))
-            });
+        let (lo, hi) = crate::metrics::min_max(kept.iter().copied());
         let step = kept
             .windows(2)
             .map(|w| (w[1] - w[0]).abs())
