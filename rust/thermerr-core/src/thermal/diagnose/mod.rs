@@ -1082,9 +1082,10 @@ fn suspects(
 ) -> Vec<Suspect> {
     let mut out = Vec::new();
     for v in std::iter::once(train).chain(hold) {
-        let mut names = match temps {
-            true => v.cols_with_prefix("T_"),
-            false => Vec::new(),
+        let mut names = if temps {
+            v.cols_with_prefix("T_")
+        } else {
+            Vec::new()
         };
         names.sort();
         names.push(axis.to_string());
