@@ -520,3 +520,73 @@ fn a_failing_room_or_boundary_sensor_is_held_at_its_last_right_reading() {
     assert_eq!(failed, sim(&room_held, &cool_held));
     assert_ne!(failed, sim(&room, &cool));
 }
+
+/// A run sampled every 15 s and calibrated on every 4th row ([`Thinned`]): the spindle starts
+/// at 615 s and stops at 4830 s, between two kept rows. The thinned view's sources take the
+/// mean power of the original rows over each step, so the heat they bring is the run's; every
+/// 4th input alone would start and stop the spindle up to 45 s late.
+#[test]
+fn a_thinned_run_keeps_the_heat_of_an_input_that_changes_between_its_rows() {
+    use thermerr_core::thermal::sim::Thinned;
+    let m = Machine::from_toml(ONE_NODE, "one.toml").unwrap();
+    let t: Vec<f64> = (0..=480).map(|k| 15.0 * k as f64).collect();
+    let n = t.len();
+    let rpm: Vec<f64> = t
+        .iter()
+        .map(|&s| {
+            if (615.0..4830.0).contains(&s) {
+                1000.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let full = run(vec![
+        ("time_s", t.clone()),
+        ("T_ambient", vec![20.0; n]),
+        ("T_a", vec![20.0; n]),
+        ("U_rpm", rpm.clone()),
+        ("E_z", vec![0.0; n]),
+    ]);
+    let every4 = |c: &[f64]| c.iter().step_by(4).copied().collect::<Vec<f64>>();
+    let picked = run(vec![
+        ("time_s", every4(&t)),
+        ("T_ambient", vec![20.0; n.div_ceil(4)]),
+        ("T_a", vec![20.0; n.div_ceil(4)]),
+        ("U_rpm", every4(&rpm)),
+        ("E_z", vec![0.0; n.div_ceil(4)]),
+    ]);
+    let sf = simulate(&m, &RunView::new(&full), &Init::FirstReading).unwrap();
+    let thin = Thinned::of(&RunView::new(&full), 4);
+    let st = simulate(&m, &thin.view(), &Init::FirstReading).unwrap();
+    let sp = simulate(&m, &RunView::new(&picked), &Init::FirstReading).unwrap();
+    let worst = |s: &[f64]| {
+        (0..s.len())
+            .map(|i| (s[i] - sf.temps[4 * i]).abs())
+            .fold(0.0, f64::max)
+    };
+    let (held, every) = (worst(&st.temps), worst(&sp.temps));
+    // 50 W into 1000 J/K warms 0.05 K/s: 45 s late is about 2 K at first
+    assert!(every > 1.5, "{every}");
+    // the mean power over a 60-s step moves the heat within that step only (measured 0.04 K
+    // against 2.15 K)
+    assert!(held < 0.05 * every, "{held} {every}");
+    // a run whose input holds over every thinned step is simulated exactly as every 4th row
+    let steady = run(vec![
+        ("time_s", t.clone()),
+        ("T_ambient", vec![20.0; n]),
+        ("T_a", vec![20.0; n]),
+        ("U_rpm", vec![700.0; n]),
+        ("E_z", vec![0.0; n]),
+    ]);
+    let a = simulate(
+        &m,
+        &Thinned::of(&RunView::new(&steady), 4).view(),
+        &Init::FirstReading,
+    )
+    .unwrap();
+    let b = simulate(&m, &RunView::new(&steady), &Init::FirstReading).unwrap();
+    for i in 0..a.temps.len() {
+        assert_relative_eq!(a.temps[i], b.temps[4 * i], epsilon = 1e-9);
+    }
+}
