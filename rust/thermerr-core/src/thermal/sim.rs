@@ -320,9 +320,9 @@ impl Thinned {
             let (a, z) = (b[0], b[1]);
             if z > a + 1 && z < n {
                 let span = run.time[z] - run.time[a];
-                for j in a..z {
-                    w[j] = if span > 0.0 {
-                        (run.time[j + 1] - run.time[j]) / span
+                for (wj, h) in w[a..z].iter_mut().zip(run.time[a..=z].windows(2)) {
+                    *wj = if span > 0.0 {
+                        (h[1] - h[0]) / span
                     } else {
                         1.0 / (z - a) as f64
                     };
