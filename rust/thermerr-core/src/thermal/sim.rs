@@ -25,22 +25,23 @@ pub struct RunView<'a> {
     /// Each column's failing rows, found once per view: a calibration simulates its view
     /// thousands of times, and each simulation holds the failing stretches of the room.
     failing: Mutex<HashMap<String, Failing>>,
-    /// A thinned view's inputs at full resolution ([`Thinned`]): what each step's sources see.
-    held: Option<HeldInputs<'a>>,
+    /// A thinned view's inputs over each of its steps ([`Thinned`]): what its sources see.
+    held: Option<&'a HashMap<String, StepInput>>,
 }
 
-/// The inputs (`U_*` columns) of a thinned run at every one of its original rows, so that a
-/// source's power over a thinned step is the mean of the powers the original rows hold, each
-/// weighted by its share of the step: thinned row `k`'s step covers original rows
-/// `start[k]..start[k + 1]`, row `j` weighing `w[j]`. Picking every k-th input instead moves each
-/// change of the input to the next kept row: on a 15-s run fitted every 60 s a spindle step
-/// came up to 45 s late, and the calibrated network left 0.6 µm held out where the noise was
-/// 0.15 µm (a false `unexplained`).
-#[derive(Clone)]
-struct HeldInputs<'a> {
-    cols: HashMap<&'a str, &'a [f64]>,
-    start: &'a [usize],
-    w: &'a [f64],
+/// The inputs (`U_*` columns) of a thinned run over each of its steps, so that a source's power
+/// over a thinned step is the mean of the powers the original rows of that step hold, each
+/// weighted by its share of the step: thinned row `k`'s step holds the values
+/// `value[start[k]..start[k + 1]]` for the shares `share[..]` of it (consecutive equal values
+/// merged, so a step over which the input holds is one entry). Picking every k-th input instead
+/// moves each change of the input to the next kept row: on a 15-s run fitted every 60 s a
+/// spindle step came up to 45 s late, and the calibrated network left 0.6 µm held out where the
+/// noise was 0.15 µm (a false `unexplained`).
+#[derive(Clone, Debug, Default)]
+struct StepInput {
+    value: Vec<f64>,
+    share: Vec<f64>,
+    start: Vec<usize>,
 }
 
 impl<'a> RunView<'a> {
@@ -61,7 +62,7 @@ impl<'a> RunView<'a> {
 
     /// Input `name`'s values through `f`, one per row, for the forcing of the step that starts
     /// there: on a thinned view the weighted mean over the original rows of the step
-    /// ([`HeldInputs`]), else the row's own.
+    /// ([`StepInput`]), else the row's own.
     pub fn held_power(&self, name: &str, mut f: impl FnMut(f64) -> f64) -> Result<Vec<f64>> {
         let col = self.col(name)?;
         // the power for the last input value (stepped inputs repeat it for hours)
@@ -72,16 +73,18 @@ impl<'a> RunView<'a> {
             }
             last.1
         };
-        match self
-            .held
-            .as_ref()
-            .and_then(|h| Some((h, *h.cols.get(name)?)))
-        {
-            Some((h, full)) => Ok((0..col.len())
+        match self.held.and_then(|h| h.get(name)) {
+            Some(h) => Ok((0..col.len())
                 .map(|k| {
-                    (h.start[k]..h.start[k + 1])
-                        .map(|j| h.w[j] * power(full[j]))
-                        .sum()
+                    let r = h.start[k]..h.start[k + 1];
+                    match r.len() {
+                        1 => power(h.value[r.start]),
+                        _ => h.value[r.clone()]
+                            .iter()
+                            .zip(&h.share[r])
+                            .map(|(&v, &w)| w * power(v))
+                            .sum(),
+                    }
                 })
                 .collect()),
             None => Ok(col.iter().map(|&v| power(v)).collect()),
@@ -146,10 +149,8 @@ impl<'a> RunView<'a> {
             time: &self.time[..rows],
             cols: self.cols.iter().map(|(n, c)| (*n, &c[..rows])).collect(),
             failing: Mutex::default(),
-            held: self.held.as_ref().map(|h| HeldInputs {
-                start: &h.start[..=rows],
-                ..h.clone()
-            }),
+            // a step's entries are found from its row, so the first rows' are the same
+            held: self.held,
         }
     }
 }
@@ -292,14 +293,12 @@ pub fn driving<'a>(run: &RunView<'a>, c: &str) -> Result<std::borrow::Cow<'a, [f
 }
 
 /// Every `k`-th row of a run, owned (see [`crate::thermal::calibrate::FIT_STEP_S`]), with its
-/// inputs at every original row for the sources' power over each step ([`HeldInputs`]).
+/// inputs over each thinned step for the sources' power ([`StepInput`]).
 pub struct Thinned {
     source: String,
     time: Vec<f64>,
     cols: Vec<(String, Vec<f64>)>,
-    inputs: Vec<(String, Vec<f64>)>,
-    start: Vec<usize>,
-    w: Vec<f64>,
+    inputs: HashMap<String, StepInput>,
 }
 
 impl Thinned {
@@ -308,29 +307,52 @@ impl Thinned {
         let every = |c: &[f64]| c.iter().step_by(k).copied().collect::<Vec<f64>>();
         let n = run.len();
         let time = every(run.time);
-        // thinned row i's step covers original rows i·k .. (i+1)·k; the last row's, itself
-        let start: Vec<usize> = (0..time.len())
-            .map(|i| i * k)
-            .chain(std::iter::once(
-                (time.len().saturating_sub(1) * k + 1).min(n),
-            ))
+        // thinned row i's step covers original rows i·k .. (i+1)·k, each by its own step's
+        // share of it; the last row's is the row itself
+        let steps: Vec<(usize, usize)> = (0..time.len())
+            .map(|i| (i * k, ((i + 1) * k).min(n)))
+            .map(|(a, z)| if z >= n { (a, a + 1) } else { (a, z) })
             .collect();
-        let mut w = vec![1.0; n];
-        for b in start.windows(2) {
-            let (a, z) = (b[0], b[1]);
-            if z > a + 1 && z < n {
-                let span = run.time[z] - run.time[a];
-                for (wj, h) in w[a..z].iter_mut().zip(run.time[a..=z].windows(2)) {
-                    *wj = if span > 0.0 {
-                        (h[1] - h[0]) / span
-                    } else {
-                        1.0 / (z - a) as f64
-                    };
-                }
+        let share = |a: usize, z: usize, j: usize| {
+            let span = if z < n {
+                run.time[z] - run.time[a]
+            } else {
+                0.0
+            };
+            if z == a + 1 {
+                1.0
+            } else if span > 0.0 {
+                (run.time[j + 1] - run.time[j]) / span
+            } else {
+                1.0 / (z - a) as f64
             }
-        }
-        let mut names: Vec<&&str> = run.cols.keys().filter(|n| n.starts_with("U_")).collect();
-        names.sort_unstable();
+        };
+        let inputs = run
+            .cols
+            .iter()
+            .filter(|(name, _)| name.starts_with("U_"))
+            .map(|(name, c)| {
+                let mut h = StepInput::default();
+                for &(a, z) in &steps {
+                    h.start.push(h.value.len());
+                    let first = h.value.len();
+                    for j in a..z {
+                        let w = share(a, z, j);
+                        match h.value.last() {
+                            Some(v) if h.value.len() > first && v.to_bits() == c[j].to_bits() => {
+                                *h.share.last_mut().expect("a value has its share") += w;
+                            }
+                            _ => {
+                                h.value.push(c[j]);
+                                h.share.push(w);
+                            }
+                        }
+                    }
+                }
+                h.start.push(h.value.len());
+                (name.to_string(), h)
+            })
+            .collect();
         Thinned {
             source: run.source.clone(),
             time,
@@ -339,12 +361,7 @@ impl Thinned {
                 .iter()
                 .map(|(n, c)| (n.to_string(), every(c)))
                 .collect(),
-            inputs: names
-                .into_iter()
-                .map(|n| (n.to_string(), run.cols[*n].to_vec()))
-                .collect(),
-            start,
-            w,
+            inputs,
         }
     }
 
@@ -358,15 +375,7 @@ impl Thinned {
                 .map(|(n, c)| (n.as_str(), c.as_slice()))
                 .collect(),
             failing: Mutex::default(),
-            held: Some(HeldInputs {
-                cols: self
-                    .inputs
-                    .iter()
-                    .map(|(n, c)| (n.as_str(), c.as_slice()))
-                    .collect(),
-                start: &self.start,
-                w: &self.w,
-            }),
+            held: Some(&self.inputs),
         }
     }
 }
