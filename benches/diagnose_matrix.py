@@ -195,7 +195,7 @@ def identified(seeds: range, hours: tuple[float, float], dt: float) -> None:
 
 def main() -> None:
     p = argparse.ArgumentParser()
-    p.add_argument("--seeds", default="1-5")
+    p.add_argument("--seeds", default="1-5", help="a seed (3) or a range of them (1-5)")
     p.add_argument("--timing", action="store_true")
     p.add_argument("--rows", default="1000,10000,100000")
     p.add_argument("--compound", action="store_true")
@@ -207,7 +207,14 @@ def main() -> None:
     if args.timing:
         timing([int(v) for v in args.rows.split(",")])
         return
-    a, b = (int(v) for v in args.seeds.split("-"))
+    try:
+        first, _, last = args.seeds.partition("-")
+        a = int(first)
+        b = int(last) if last else a
+        if b < a:
+            raise ValueError
+    except ValueError:
+        p.error(f"--seeds {args.seeds!r}: give a seed (3) or a range (1-5)")
     if args.compound or args.identified:
         hours = args.hours or ("10,5" if args.compound else "8,4")
         h_train, h_test = (float(v) for v in hours.split(","))
