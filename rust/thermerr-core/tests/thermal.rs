@@ -30,19 +30,24 @@ axis = "E_z"
 um_per_k = { a = 3.0 }
 "#;
 
+/// A run for [`ONE_NODE`]: the room and the node's sensor at 20 °C, its input `rpm`, no drift.
+fn one_node_run(t: &[f64], rpm: Vec<f64>) -> Run {
+    let n = t.len();
+    run(vec![
+        ("time_s", t.to_vec()),
+        ("T_ambient", vec![20.0; n]),
+        ("T_a", vec![20.0; n]),
+        ("U_rpm", rpm),
+        ("E_z", vec![0.0; n]),
+    ])
+}
+
 #[test]
 fn one_node_step_response_is_exact() {
     let m = Machine::from_toml(ONE_NODE, "one.toml").unwrap();
     // coarse, irregular sampling: the discretisation is exact anyway
     let t = vec![0.0, 10.0, 250.0, 600.0, 601.0, 3000.0];
-    let n = t.len();
-    let r = run(vec![
-        ("time_s", t.clone()),
-        ("T_ambient", vec![20.0; n]),
-        ("T_a", vec![20.0; n]),
-        ("U_rpm", vec![1000.0; n]),
-        ("E_z", vec![0.0; n]),
-    ]);
+    let r = one_node_run(&t, vec![1000.0; t.len()]);
     let s = simulate(&m, &RunView::new(&r), &Init::FirstReading).unwrap();
     let e = &s.drift[0].1;
     for (k, tk) in t.iter().enumerate() {
@@ -530,7 +535,6 @@ fn a_thinned_run_keeps_the_heat_of_an_input_that_changes_between_its_rows() {
     use thermerr_core::thermal::sim::Thinned;
     let m = Machine::from_toml(ONE_NODE, "one.toml").unwrap();
     let t: Vec<f64> = (0..=480).map(|k| 15.0 * k as f64).collect();
-    let n = t.len();
     let rpm: Vec<f64> = t
         .iter()
         .map(|&s| {
@@ -541,21 +545,9 @@ fn a_thinned_run_keeps_the_heat_of_an_input_that_changes_between_its_rows() {
             }
         })
         .collect();
-    let full = run(vec![
-        ("time_s", t.clone()),
-        ("T_ambient", vec![20.0; n]),
-        ("T_a", vec![20.0; n]),
-        ("U_rpm", rpm.clone()),
-        ("E_z", vec![0.0; n]),
-    ]);
+    let full = one_node_run(&t, rpm.clone());
     let every4 = |c: &[f64]| c.iter().step_by(4).copied().collect::<Vec<f64>>();
-    let picked = run(vec![
-        ("time_s", every4(&t)),
-        ("T_ambient", vec![20.0; n.div_ceil(4)]),
-        ("T_a", vec![20.0; n.div_ceil(4)]),
-        ("U_rpm", every4(&rpm)),
-        ("E_z", vec![0.0; n.div_ceil(4)]),
-    ]);
+    let picked = one_node_run(&every4(&t), every4(&rpm));
     let sf = simulate(&m, &RunView::new(&full), &Init::FirstReading).unwrap();
     let thin = Thinned::of(&RunView::new(&full), 4);
     let st = simulate(&m, &thin.view(), &Init::FirstReading).unwrap();
@@ -572,13 +564,7 @@ fn a_thinned_run_keeps_the_heat_of_an_input_that_changes_between_its_rows() {
     // against 2.15 K)
     assert!(held < 0.05 * every, "{held} {every}");
     // a run whose input holds over every thinned step is simulated exactly as every 4th row
-    let steady = run(vec![
-        ("time_s", t.clone()),
-        ("T_ambient", vec![20.0; n]),
-        ("T_a", vec![20.0; n]),
-        ("U_rpm", vec![700.0; n]),
-        ("E_z", vec![0.0; n]),
-    ]);
+    let steady = one_node_run(&t, vec![700.0; t.len()]);
     let a = simulate(
         &m,
         &Thinned::of(&RunView::new(&steady), 4).view(),
