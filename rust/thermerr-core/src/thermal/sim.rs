@@ -77,14 +77,11 @@ impl<'a> RunView<'a> {
             Some(h) => Ok((0..col.len())
                 .map(|k| {
                     let r = h.start[k]..h.start[k + 1];
-                    match r.len() {
-                        1 => power(h.value[r.start]),
-                        _ => h.value[r.clone()]
-                            .iter()
-                            .zip(&h.share[r])
-                            .map(|(&v, &w)| w * power(v))
-                            .sum(),
-                    }
+                    h.value[r.clone()]
+                        .iter()
+                        .zip(&h.share[r])
+                        .map(|(&v, &w)| w * power(v))
+                        .sum()
                 })
                 .collect()),
             None => Ok(col.iter().map(|&v| power(v)).collect()),
@@ -313,20 +310,6 @@ impl Thinned {
             .map(|i| (i * k, ((i + 1) * k).min(n)))
             .map(|(a, z)| if z >= n { (a, a + 1) } else { (a, z) })
             .collect();
-        let share = |a: usize, z: usize, j: usize| {
-            let span = if z < n {
-                run.time[z] - run.time[a]
-            } else {
-                0.0
-            };
-            if z == a + 1 {
-                1.0
-            } else if span > 0.0 {
-                (run.time[j + 1] - run.time[j]) / span
-            } else {
-                1.0 / (z - a) as f64
-            }
-        };
         let inputs = run
             .cols
             .iter()
@@ -334,19 +317,27 @@ impl Thinned {
             .map(|(name, c)| {
                 let mut h = StepInput::default();
                 for &(a, z) in &steps {
-                    h.start.push(h.value.len());
                     let first = h.value.len();
+                    h.start.push(first);
+                    let span = run.time[z.min(n - 1)] - run.time[a];
                     for j in a..z {
-                        let w = share(a, z, j);
-                        match h.value.last() {
-                            Some(v) if h.value.len() > first && v.to_bits() == c[j].to_bits() => {
-                                *h.share.last_mut().expect("a value has its share") += w;
-                            }
-                            _ => {
-                                h.value.push(c[j]);
-                                h.share.push(w);
-                            }
+                        let w = if span > 0.0 {
+                            (run.time[j + 1] - run.time[j]) / span
+                        } else {
+                            1.0 / (z - a) as f64
+                        };
+                        if h.value.len() > first
+                            && h.value[h.value.len() - 1].to_bits() == c[j].to_bits()
+                        {
+                            *h.share.last_mut().expect("a value has its share") += w;
+                        } else {
+                            h.value.push(c[j]);
+                            h.share.push(w);
                         }
+                    }
+                    // a step over which the input holds is its one value, exactly
+                    if h.value.len() == first + 1 {
+                        h.share[first] = 1.0;
                     }
                 }
                 h.start.push(h.value.len());
