@@ -1678,29 +1678,33 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         }
         ((parent, tree_order, link_notes), first_step)
     };
+    // a tree built without the `banned` links is tried when it spans every node and is new
+    let add = |trees: &mut Vec<Tree>, banned: &[(usize, usize)]| {
+        let (t, _) = prim(banned);
+        if t.1.len() == nn && !trees.iter().any(|u| u.0 == t.0) {
+            trees.push(t);
+        }
+    };
     // the tree, and the trees whose first link is the next ALT_TREES candidates for it
     // instead: calibration decides between them
     let (first, first_step) = prim(&[]);
     let mut trees: Vec<Tree> = vec![first];
     if let Some(ranked) = first_step {
         for k in 1..=ALT_TREES.min(ranked.len().saturating_sub(1)) {
-            let (t, _) = prim(&ranked[..k]);
-            if t.1.len() == nn && !trees.iter().any(|u| u.0 == t.0) {
-                trees.push(t);
-            }
+            add(&mut trees, &ranked[..k]);
         }
     }
     // then the trees without each later link of the rule's tree (its own next candidate
     // instead); they need LATER_TREE_MARGIN to be taken (step 7)
     let n_rule = trees.len();
-    let (rule_parent, rule_order) = (trees[0].0.clone(), trees[0].1.clone());
-    for &j in rule_order.iter().skip(2) {
-        if let Some(i) = rule_parent[j] {
-            let (t, _) = prim(&[(i.min(j), i.max(j))]);
-            if t.1.len() == nn && !trees.iter().any(|u| u.0 == t.0) {
-                trees.push(t);
-            }
-        }
+    let later: Vec<(usize, usize)> = trees[0]
+        .1
+        .iter()
+        .skip(2)
+        .filter_map(|&j| trees[0].0[j].map(|i| (i.min(j), i.max(j))))
+        .collect();
+    for link in &later {
+        add(&mut trees, std::slice::from_ref(link));
     }
 
     // 6. values: G = 100 W / steady rise at full power, half to ambient, half to the link
