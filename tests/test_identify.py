@@ -277,6 +277,31 @@ def test_a_moved_link_that_fits_only_somewhat_better_is_not_taken():
     assert (d.verdict, d.column) == ("unmodeled_source", "T_hydraulic")
 
 
+def test_a_drifting_sensor_is_not_read_as_its_parts_heat():
+    """A thermocouple drifting 0.185 K/h over a day and a half (the 36-h lathe at 15 s, seed 5,
+    ``T_carriage``): without a drift beside it, identification bent the carriage's capacity,
+    losses and links around the drift and the diagnosis said ``unexplained`` (1.90 µm held
+    out). Calibrated beside the network, the drift removes 97 % of the training misfit (at
+    least ``DRIFT_NUISANCE_SHARE``, half, asked), its rate comes out within 1 % of the true one
+    (5 % allowed: the term also takes up what the network misfits), the file carries no drift
+    term, and the diagnosis names the drift of ``T_carriage``. The same lathe with nothing
+    hidden: the best drift removes under 1 % and is not kept (measured 2026-11-29)."""
+    c = syn.make_case("lathe", "sensor_drift", 5, hours=(36.0, 12.0), dt=15.0)
+    train, test = _run(c.train, "train.csv"), _run(c.test, "test.csv")
+    m, s = Machine.identify(train)
+    d = s["sensor_drift"]
+    assert d["kept"] and d["sensor"] == "T_carriage" and d["share"] > 0.9, d
+    assert d["k_per_h"] == pytest.approx(c.params["rate_k_per_h"], rel=0.05)
+    assert any("a drift of T_carriage's reading calibrated beside the network" in n for n in s["notes"])
+    assert "sensor_drift_k_per_h" not in s["toml"]
+    dg = diagnose(train, m, test)
+    assert (dg.verdict, dg.column) == ("sensor_drift", "T_carriage")
+
+    c0 = syn.make_case("lathe", "none", 5, hours=(36.0, 12.0), dt=15.0)
+    _, s0 = Machine.identify(_run(c0.train, "train.csv"))
+    assert not s0["sensor_drift"]["kept"] and s0["sensor_drift"]["share"] < 0.01, s0["sensor_drift"]
+
+
 def test_fixed_node_count_and_clusters_listed():
     c = syn.make_case("vmc", "none", 1, hours=HOURS, dt=DT_S)
     m, s = Machine.identify(_run(c.train, "run.csv"), nodes=2)

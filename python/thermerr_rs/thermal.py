@@ -71,7 +71,8 @@ class Machine:
         sources, link the nodes by response order, set values from each node's time constant and
         calibrate on the first ``train_fraction`` of the run; then a node no sensor reads (a bed,
         a base) behind the slowest node, kept when it lowers the training fit's BIC and its time
-        constant is within the training rows. A temperature that a first-order lag
+        constant is within the training rows; then a drift of one sensor's reading beside the
+        network, kept for the calibration when it is most of the training misfit. A temperature that a first-order lag
         (at most 30 min) of another one reproduces within 3 noise levels is a second sensor on
         that part: a member of its node, not a node. A run with no ``U_*`` input column is
         driven by the temperature that rises most over the ambient, as a boundary node linked to
@@ -88,7 +89,12 @@ class Machine:
         ``column``, the node's sensor ``of``, ``tau_s``, ``gain``, ``noise_ratio``), ``spare``,
         ``links``, ``sources``, ``node_rule``, ``unsensed`` (the node no sensor reads tried behind
         the slowest node: ``name``, ``linked_to``, ``kept`` (when it lowers the training BIC and settles within the training rows),
-        ``ssr_without``, ``ssr_with``, ``tau_s``), ``suspect_readings`` (readings the run itself
+        ``ssr_without``, ``ssr_with``, ``tau_s``), ``sensor_drift`` (the drift of one sensor's
+        reading calibrated beside the network, the best of the sensed nodes': ``node``, ``sensor``,
+        ``k_per_h``, ``share`` of the training misfit it removes, ``slowest_tau_s``, ``kept``
+        when it removes at least half and the training rows last that time constant; kept, the
+        network's values are the ones calibrated beside it, and the file has no drift term),
+        ``suspect_readings`` (readings the run itself
         makes suspect, as in a diagnosis's report; also warned as
         :class:`~thermerr_rs.errors.SuspectReadingWarning`) and
         ``toml``, the file with a comment on every choice (what ``thermerr init`` writes).

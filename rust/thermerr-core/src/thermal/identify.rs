@@ -77,6 +77,13 @@
 //!    nodes read the heat they lose into such a part as their own capacities and losses; on the
 //!    synthetic VMC, whose bed no sensor reads, the diagnosis then named false causes on
 //!    day-long runs (measured in `tests/test_identify.py`).
+//!    **A sensor that drifts.** Then the network is calibrated again with a drift of one
+//!    sensor's reading beside it, each sensed node in turn, and the best is kept when it removes
+//!    at least [`DRIFT_NUISANCE_SHARE`] of the normalised training SSR and the training rows
+//!    last the slowest time constant of the network calibrated beside it ([`with_drift_beside`]):
+//!    the network's values are then that calibration's, but the file has no drift term (whether
+//!    the sensor drifts is the diagnosis's question). Without it a drifting reading is read as
+//!    its part's heat, and the bent network cannot hold the drift when the diagnosis offers it.
 //! 7. **Drift maps for a new run.** A run is simulated from its sensors' first readings, so
 //!    every axis's map is fitted last to the temperatures the rounded network simulates from
 //!    there, by ridge regression with its penalty chosen on blocked folds of the training rows
@@ -86,8 +93,8 @@
 use serde::Serialize;
 
 use super::calibrate::{
-    calibrate, cancelling_term, evaluate, ridge_drift, store_drift, targets, Calibration,
-    CalibrationOptions, Reading, RIDGE_FOLDS,
+    calibrate, cancelling_term, default_params, evaluate, ridge_drift, store_drift, targets,
+    Calibration, CalibrationOptions, FreeParam, Param, Reading, RIDGE_FOLDS,
 };
 use super::machine::{
     bad, Ambient, DriftSpec, FittedStart, Identified, LinkSpec, Machine, NodeSpec, SourceSpec,
@@ -264,6 +271,8 @@ pub struct Identification {
     pub calibration_converged: bool,
     /// The unsensed node tried behind the slowest node (module docs, step 6), kept or not.
     pub unsensed: Option<UnsensedMass>,
+    /// The sensor drift tried beside the network (module docs, step 6), kept or not.
+    pub sensor_drift: Option<DriftTried>,
 }
 
 /// First-order lag with the inputs held over each step: y⁺ = a·y + (1 − a)·p, a = e^{−h/τ}.
@@ -1885,6 +1894,11 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         link_notes.extend(link);
         unsensed = Some(info);
     }
+    // 7c. a sensor that drifts, calibrated beside the network (module docs, step 6)
+    let (cal, sensor_drift) = with_drift_beside(cal, &view, &cal_opts, span)?;
+    if let Some(d) = &sensor_drift {
+        notes.push(drift_note(d, span));
+    }
     let mut machine = cal.machine.clone();
     // every further axis: its drift map by least squares on the very node temperatures the
     // file will simulate (the calibrated network from the first axis's initial state). A
@@ -2113,6 +2127,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         suspect_readings,
         calibration_converged: cal.converged,
         unsensed,
+        sensor_drift,
     };
     id.toml = commented_toml(&id)?;
     // the text must load back to the very machine judged above
@@ -2123,6 +2138,124 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         ));
     }
     Ok(id)
+}
+
+/// The share of the identified network's training misfit (its normalised SSR) that a sensor
+/// drift calibrated beside it must remove for the calibration with it to be kept (module docs,
+/// step 6, "A sensor that drifts").
+pub const DRIFT_NUISANCE_SHARE: f64 = 0.5;
+
+/// The sensor drift tried beside the identified network (module docs, step 6): the node whose
+/// sensor's drift removes the most of the training misfit, its calibrated rate, that share,
+/// and whether the calibration with it was kept (the file never carries the term).
+#[derive(Clone, Debug, Serialize)]
+pub struct DriftTried {
+    pub node: String,
+    pub sensor: String,
+    pub k_per_h: f64,
+    /// 1 − SSR with the term / SSR without it (normalised training SSRs).
+    pub share: f64,
+    /// The network's slowest time constant (s), which the training rows must last.
+    pub slowest_tau_s: f64,
+    pub kept: bool,
+}
+
+/// The note on the sensor drift tried beside the network; `span`: the training rows (s).
+fn drift_note(d: &DriftTried, span: f64) -> String {
+    let pct = |x: f64| format!("{:.0} %", 100.0 * x);
+    let asked = pct(DRIFT_NUISANCE_SHARE);
+    let what = format!(
+        "a drift of {}'s reading calibrated beside the network ({:+.3} K/h)",
+        d.sensor, d.k_per_h
+    );
+    if d.kept {
+        format!(
+            "{what} removes {} of its training misfit (at least {asked} asked), so the network's \
+             values are the ones calibrated beside it, lest the drift be read as {}'s heat; the \
+             file has no drift term: whether {} drifts is the diagnosis's question (a \
+             sensor_drift candidate) on held-out data",
+            pct(d.share),
+            d.node,
+            d.sensor
+        )
+    } else if d.share < DRIFT_NUISANCE_SHARE {
+        format!(
+            "{what}, the best of the sensed nodes', was tried and not kept: it removes {} of the \
+             training misfit, less than the {asked} asked",
+            pct(d.share)
+        )
+    } else {
+        format!(
+            "{what}, the best of the sensed nodes', removes {} of the training misfit but was \
+             not kept: the training rows ({}) are shorter than the network's slowest time \
+             constant ({}), over which a slow part's warming is a line too",
+            pct(d.share),
+            fmt_s(span),
+            fmt_s(d.slowest_tau_s)
+        )
+    }
+}
+
+/// The calibrated network `cal` calibrated again with a drift of one sensor beside it, each
+/// sensed node in turn (in parallel), the one that lowers the normalised training SSR most
+/// kept when it removes at least [`DRIFT_NUISANCE_SHARE`] of it and the training rows (`span`,
+/// s) last at least the network's slowest time constant (a slow node's warming on shorter
+/// rows is a line too). The kept calibration's values are the network's, without the term:
+/// whether the sensor drifts stays the diagnosis's question. Returns the calibration to go on
+/// with and what was tried (None: no sensed node).
+fn with_drift_beside(
+    cal: Calibration,
+    view: &RunView<'_>,
+    opts: &CalibrationOptions,
+    span: f64,
+) -> Result<(Calibration, Option<DriftTried>)> {
+    use rayon::prelude::*;
+    let m0 = &cal.machine;
+    let simulated = |i: &usize| m0.nodes[*i].boundary.is_none();
+    let sensed: Vec<usize> = (0..m0.nodes.len())
+        .filter(|i| simulated(i) && m0.nodes[*i].sensor.is_some())
+        .collect();
+    let tried: Vec<Calibration> = sensed
+        .par_iter()
+        .map(|&i| {
+            let mut free = default_params(m0, opts);
+            free.push(FreeParam {
+                param: Param::SensorDrift(i),
+                log: false,
+                lo: -3.0,
+                hi: 3.0,
+                start: 0.0,
+                prior: None,
+            });
+            calibrate(m0, view, opts, Some(free))
+        })
+        .collect::<Result<_>>()?;
+    let Some(k) = (0..tried.len()).min_by(|&a, &b| tried[a].ssr.total_cmp(&tried[b].ssr)) else {
+        return Ok((cal, None));
+    };
+    let i = sensed[k];
+    let share = 1.0 - tried[k].ssr / cal.ssr;
+    // the slowest time constant of the network calibrated beside the drift (the one kept)
+    let m1 = &tried[k].machine;
+    let slowest = (0..m1.nodes.len())
+        .filter(simulated)
+        .map(|i| node_tau(m1, i))
+        .fold(0.0, f64::max);
+    let kept = share >= DRIFT_NUISANCE_SHARE && span >= slowest;
+    let info = DriftTried {
+        node: m0.nodes[i].name.clone(),
+        sensor: m0.nodes[i].sensor.clone().unwrap_or_default(),
+        k_per_h: tried[k].machine.nodes[i].sensor_drift_k_per_h,
+        share,
+        slowest_tau_s: slowest,
+        kept,
+    };
+    if !kept {
+        return Ok((cal, Some(info)));
+    }
+    let mut c = tried.into_iter().nth(k).expect("the best");
+    c.machine.nodes[i].sensor_drift_k_per_h = 0.0;
+    Ok((c, Some(info)))
 }
 
 /// What the unsensed node's step tried: the node, the note to say, and the link's note when kept.
