@@ -299,6 +299,30 @@ def test_a_failing_column_is_not_tried_as_a_heat_source():
     assert np.array_equal(d.series["extended"], clean.series["extended"])
 
 
+def test_a_second_reading_of_the_room_is_not_tried_as_a_heat_source():
+    """A second thermometer in the room (a logger that also writes a ``T_ambient`` beside the
+    sensor the network reads as the room, or two room sensors): a source from it is the room
+    read twice, an ambient coupling under another name, and on the real 46-h run with a copy of
+    its room column added it took one of the four places among the columns tried, so the source
+    from ``T_t5`` on ``E_ch4`` went untried and the axis ended at 7.64 µm left against 3.24
+    (found 2026-11-29). Its rise follows the room's (r >= 0.99), so it is not tried, and the
+    diagnosis is the one of the run without it, to the bit."""
+    c = syn.make_case("vmc", "ambient_coupling", 1, hours=(8.0, 4.0), dt=120.0)
+    m = Machine.from_toml(c.nominal_toml())
+    clean = diagnose(tr.Run.from_frame(c.train), m, tr.Run.from_frame(c.test), progress=False)
+    rng = np.random.default_rng(0)
+
+    def with_copy(cols):
+        room = np.asarray(cols["T_ambient"], dtype=float)
+        return dict(cols, T_room2=room + 0.3 + rng.normal(0.0, 0.02, room.shape))
+
+    d = diagnose(tr.Run.from_frame(with_copy(c.train)), m, tr.Run.from_frame(with_copy(c.test)), progress=False)
+    assert "T_room2" not in {x.get("column") for x in d.report["candidates"]}
+    assert d.verdict == clean.verdict == "ambient_coupling"
+    assert d.report["candidates"] == clean.report["candidates"]
+    assert np.array_equal(d.series["extended"], clean.series["extended"])
+
+
 @pytest.mark.parametrize("cause", ["none", "ambient_coupling", "unmodeled_source"])
 def test_a_node_sensor_that_fails_is_not_fitted_on_its_failing_rows(cause):
     """The machine file's sensor of a node (``T_headstock``) opens halfway through the training

@@ -316,6 +316,20 @@ def test_fixed_node_count_and_clusters_listed():
             assert f"# other sensors of this cluster (not in the model): {', '.join(n['members'][1:])}" in s["toml"]
 
 
+def test_no_more_sensors_than_the_node_limit_are_a_node_each_and_the_rule_says_why():
+    """With as many clusters as sensors each sensor is alone and the Xie-Beni index is 0 by
+    construction: it cannot choose there. The VMC's four screened sensors are four nodes (as
+    before, when the index of 4 clusters printed 0.000 and won), and the rule says why instead of
+    printing an index that could not lose; asked for fewer, they are clustered."""
+    c = syn.make_case("vmc", "none", 1, hours=HOURS, dt=DT_S)
+    run = _run(c.train, "run.csv")
+    _, s = Machine.identify(run)
+    assert s["n_nodes"] == 4 and s["node_rule"].startswith("4 sensors besides the ambient, at most 5 nodes: one node each")
+    assert "Xie-Beni index is 0 by construction" in s["node_rule"]
+    _, s3 = Machine.identify(run, nodes=3)
+    assert s3["n_nodes"] == 3 and "fuzzy c-means" in s3["node_rule"]
+
+
 def test_toml_round_trips_and_states_every_choice(tmp_path):
     c = syn.make_case("vmc", "none", 2, hours=HOURS, dt=DT_S)
     run = _run(c.train, "run.csv")

@@ -10,7 +10,8 @@
 //! 2. **Nodes.** The other temperatures' rises over the ambient on the training rows, each
 //!    divided by its largest magnitude (a shape, not a size), are clustered by fuzzy c-means
 //!    (m = 2, fixed seed). The count is the one given, else the one of 2..=5 (at most the sensor
-//!    count) with the smallest Xie–Beni index; two sensors or fewer are a node each. A node
+//!    count) with the smallest Xie–Beni index; as many sensors as `max_nodes` or fewer are a
+//!    node each (one cluster per sensor scores 0 by construction, so the index cannot choose). A node
 //!    carries one sensor: the member with the largest membership of its cluster; the others are
 //!    listed in the file's comments and stay spare columns (the diagnosis tries them as
 //!    unmodelled sources). Before the clustering, a temperature that a first-order lag of another
@@ -1393,6 +1394,19 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
             vec![1.0; ns],
             ns,
             format!("{ns} sensor(s) besides the ambient: one node each"),
+        ),
+        // as many clusters as sensors put each sensor alone, at a Xie-Beni index of 0 by
+        // construction: the index cannot choose there, so it is not asked
+        None if ns <= opts.max_nodes => (
+            (0..ns).collect(),
+            vec![1.0; ns],
+            ns,
+            format!(
+                "{ns} sensors besides the ambient, at most {} nodes: one node each (with as many \
+                 clusters as sensors the Xie-Beni index is 0 by construction, so it does not \
+                 choose; --nodes N groups them)",
+                opts.max_nodes
+            ),
         ),
         None => {
             let hi = opts.max_nodes.max(2).min(ns);

@@ -474,6 +474,18 @@ pub fn node_sensor_mate(
         .map(str::to_string)
 }
 
+/// Whether `col` is a second reading of `m`'s room: its rise over the first `rows` rows follows
+/// the ambient column's ([`follows`]). A heat source from it would be the room read twice (an
+/// ambient coupling under another name), so the diagnosis does not try it as one.
+pub(super) fn reads_the_room(m: &Machine, train: &RunView<'_>, rows: usize, col: &str) -> bool {
+    match &m.ambient {
+        Ambient::Column(c) if c != col => {
+            rise_of(train, rows, col).is_some_and(|rx| follows(&rx, train, c))
+        }
+        _ => false,
+    }
+}
+
 /// Whether column `other` reads the same part as `col` (whose [`rise_of`] is `rx`): its rise
 /// follows at Pearson r ≥ [`MATE_R`], or one is a lagged copy of the other by identification's
 /// rule ([`is_lagged_copy`](crate::thermal::identify::is_lagged_copy)). A second sensor a few
@@ -812,6 +824,37 @@ um_per_k = { a = 1.0, b = 2.0 }
             Some("T_a")
         );
         assert_eq!(node_sensor_mate(&m, &view, n, "T_far"), None);
+    }
+
+    #[test]
+    fn a_second_reading_of_the_room_is_the_room_not_a_source() {
+        // the room cycles 3 K a day; T_room2 reads it 0.05 K warm, T_part warms on its own
+        let m = Machine::from_toml(TWO, "two.toml").unwrap();
+        let n = 193;
+        let t: Vec<f64> = (0..n).map(|k| 900.0 * k as f64).collect();
+        let room: Vec<f64> = t
+            .iter()
+            .map(|s| 20.0 + 1.5 * (s / 86_400.0 * std::f64::consts::TAU).sin())
+            .collect();
+        let part: Vec<f64> = t
+            .iter()
+            .map(|s| 20.0 + 20.0 * (1.0 - portable::exp(-s / 20_000.0)))
+            .collect();
+        let names = ["time_s", "T_ambient", "T_a", "T_room2", "U_rpm", "E_z"];
+        let cols = vec![
+            t.clone(),
+            room.clone(),
+            part,
+            room.iter().map(|r| r + 0.05).collect(),
+            vec![1000.0; n],
+            vec![0.0; n],
+        ];
+        let names = names.iter().map(|s| s.to_string()).collect();
+        let run = Run::from_columns("<t>", names, cols, NanPolicy::Error, None).unwrap();
+        let view = RunView::new(&run);
+        assert!(reads_the_room(&m, &view, n, "T_room2"));
+        assert!(!reads_the_room(&m, &view, n, "T_a"));
+        assert!(!reads_the_room(&m, &view, n, "T_ambient"));
     }
 
     #[test]

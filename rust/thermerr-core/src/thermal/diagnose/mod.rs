@@ -642,7 +642,8 @@ fn round_candidates(
     let (train, split, axis, axis_index) = (cx.train, cx.split, cx.axis, base.axis_index);
     let current = base.calibration;
     let mut free = candidates::free_columns(mk, train);
-    free.retain(|c| !cx.failed.contains(c));
+    // nor a second reading of the room (a source from it is the room read twice)
+    free.retain(|c| !cx.failed.contains(c) && !candidates::reads_the_room(mk, train, split, c));
     let ranked = if free.len() > MAX_SOURCE_COLUMNS {
         let tg = targets(&current.machine, train, axis)?;
         let (_, sim, _) = evaluate(
