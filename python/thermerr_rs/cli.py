@@ -72,7 +72,16 @@ def _print_json(obj: Any) -> None:
 
 
 def _read(args: argparse.Namespace, path: str) -> Run:
-    return read_run(path, nan=args.nan, delimiter=args.delimiter)
+    run = read_run(path, nan=args.nan, delimiter=args.delimiter)
+    # what --nan changed is said: a result read from mended rows is not a result of the file
+    if not getattr(args, "quiet", False):
+        if run.interpolated:
+            print(f"thermerr: {path}: {run.interpolated} missing value(s) filled by linear "
+                  "interpolation in time (--nan interpolate)", file=sys.stderr)
+        if run.dropped_rows:
+            print(f"thermerr: {path}: {len(run.dropped_rows)} row(s) with a missing value dropped "
+                  f"(--nan drop; first: row {run.dropped_rows[0]})", file=sys.stderr)
+    return run
 
 
 def _delimiter(text: str) -> str:

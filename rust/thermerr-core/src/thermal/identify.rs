@@ -2213,8 +2213,8 @@ fn drift_note(d: &DriftTried, span: f64) -> String {
 /// The calibrated network `cal` calibrated again with a drift of one sensor beside it, each
 /// sensed node in turn (in parallel), the one that lowers the normalised training SSR most
 /// kept when it removes at least [`DRIFT_NUISANCE_SHARE`] of it and the training rows (`span`,
-/// s) last at least the network's slowest time constant (a slow node's warming on shorter
-/// rows is a line too). The kept calibration's values are the network's, without the term:
+/// s) last at least the slowest time constant of the network calibrated beside it (a slow
+/// node's warming on shorter rows is a line too). The kept calibration's values are the network's, without the term:
 /// whether the sensor drifts stays the diagnosis's question. Returns the calibration to go on
 /// with and what was tried (None: no sensed node).
 fn with_drift_beside(
