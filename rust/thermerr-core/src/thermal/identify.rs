@@ -2192,6 +2192,13 @@ fn drift_note(d: &DriftTried, span: f64) -> String {
             d.node,
             d.sensor
         )
+    } else if d.share < 0.0 {
+        format!(
+            "{what}, the best of the sensed nodes', was tried and not kept: its calibration \
+             ended with a training misfit {} larger than the network's own (a poorer place; \
+             {asked} less asked)",
+            pct(-d.share)
+        )
     } else if d.share < DRIFT_NUISANCE_SHARE {
         format!(
             "{what}, the best of the sensed nodes', was tried and not kept: it removes {} of the \
