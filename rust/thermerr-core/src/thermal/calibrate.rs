@@ -51,6 +51,20 @@ pub struct FreeParam {
     pub prior: Option<(f64, f64)>,
 }
 
+/// The free parameter of a drift of node `i`'s sensor reading: linear, −3..3 K/h, from 0 (the
+/// diagnosis's `sensor_drift` candidates and the drift identification calibrates beside its
+/// network).
+pub fn sensor_drift_param(i: usize) -> FreeParam {
+    FreeParam {
+        param: Param::SensorDrift(i),
+        log: false,
+        lo: -3.0,
+        hi: 3.0,
+        start: 0.0,
+        prior: None,
+    }
+}
+
 /// Options of [`calibrate`].
 #[derive(Clone, Debug)]
 pub struct CalibrationOptions {

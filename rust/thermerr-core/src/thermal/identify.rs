@@ -11,8 +11,8 @@
 //!    divided by its largest magnitude (a shape, not a size), are clustered by fuzzy c-means
 //!    (m = 2, fixed seed). The count is the one given, else the one of 2..=5 (at most the sensor
 //!    count) with the smallest Xie–Beni index; as many sensors as `max_nodes` or fewer are a
-//!    node each (one cluster per sensor scores 0 by construction, so the index cannot choose). A node
-//!    carries one sensor: the member with the largest membership of its cluster; the others are
+//!    node each (one cluster per sensor scores 0 by construction, so the index cannot choose).
+//!    A node carries one sensor: the member with the largest membership of its cluster; the others are
 //!    listed in the file's comments and stay spare columns (the diagnosis tries them as
 //!    unmodelled sources). Before the clustering, a temperature that a first-order lag of another
 //!    one (its best τ at most 30 min, searched up to 2 h) and the ambient reproduce within [`COPY_RATIO`] noise levels is
@@ -94,8 +94,8 @@
 use serde::Serialize;
 
 use super::calibrate::{
-    calibrate, cancelling_term, default_params, evaluate, ridge_drift, store_drift, targets,
-    Calibration, CalibrationOptions, FreeParam, Param, Reading, RIDGE_FOLDS,
+    calibrate, cancelling_term, default_params, evaluate, ridge_drift, sensor_drift_param,
+    store_drift, targets, Calibration, CalibrationOptions, Reading, RIDGE_FOLDS,
 };
 use super::machine::{
     bad, Ambient, DriftSpec, FittedStart, Identified, LinkSpec, Machine, NodeSpec, SourceSpec,
@@ -2221,8 +2221,8 @@ fn drift_note(d: &DriftTried, span: f64) -> String {
 /// sensed node in turn (in parallel), the one that lowers the normalised training SSR most
 /// kept when it removes at least [`DRIFT_NUISANCE_SHARE`] of it and the training rows (`span`,
 /// s) last at least the slowest time constant of the network calibrated beside it (a slow
-/// node's warming on shorter rows is a line too). The kept calibration's values are the network's, without the term:
-/// whether the sensor drifts stays the diagnosis's question. Returns the calibration to go on
+/// node's warming on shorter rows is a line too). The kept calibration's values are the
+/// network's, without the term: whether the sensor drifts stays the diagnosis's question. Returns the calibration to go on
 /// with and what was tried (None: no sensed node).
 fn with_drift_beside(
     cal: Calibration,
@@ -2240,14 +2240,7 @@ fn with_drift_beside(
         .par_iter()
         .map(|&i| {
             let mut free = default_params(m0, opts);
-            free.push(FreeParam {
-                param: Param::SensorDrift(i),
-                log: false,
-                lo: -3.0,
-                hi: 3.0,
-                start: 0.0,
-                prior: None,
-            });
+            free.push(sensor_drift_param(i));
             calibrate(m0, view, opts, Some(free))
         })
         .collect::<Result<_>>()?;

@@ -6,7 +6,8 @@ use super::{Candidate, Fit, Holdout};
 use crate::error::Result;
 use crate::portable;
 use crate::thermal::calibrate::{
-    apply, calibrate, default_params, Calibration, CalibrationOptions, FreeParam, Param,
+    apply, calibrate, default_params, sensor_drift_param, Calibration, CalibrationOptions,
+    FreeParam, Param,
 };
 use crate::thermal::machine::{Ambient, InputTerm, LinkSpec, Machine, NodeSpec};
 use crate::thermal::sim::RunView;
@@ -227,11 +228,7 @@ pub(super) fn sensor_drift(m: &Machine) -> Vec<Spec> {
             out.push(Spec {
                 column: Some(col.clone()),
                 node: Some(node.name.clone()),
-                ..Spec::new(
-                    Cause::SensorDrift,
-                    m.clone(),
-                    vec![linear_param(Param::SensorDrift(i), -3.0, 3.0, 0.0)],
-                )
+                ..Spec::new(Cause::SensorDrift, m.clone(), vec![sensor_drift_param(i)])
             });
         }
     }
