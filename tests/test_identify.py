@@ -541,6 +541,51 @@ def test_cli_bad_input_exit_2_one_line_nothing_written(tmp_path, capsys, kind):
     assert not out.exists()
 
 
+def _joined(cols, restart_clock=False):
+    """A run followed by itself: the clock running on (two runs joined into one log) or starting
+    again at the first row's time."""
+    t = np.asarray(cols["time_s"])
+    later = t if restart_clock else t + t[-1] + (t[1] - t[0])
+    return {k: np.concatenate([np.asarray(v), later if k == "time_s" else np.asarray(v)]) for k, v in cols.items()}
+
+
+def test_two_runs_joined_in_one_file_are_refused_naming_the_row(tmp_path, capsys):
+    """Two runs joined with the clock running on: every column steps back to its cold reading at
+    one row. Taken as sensor faults, every probe failed from there on and `init` wrote a file with
+    no held-out figure on any axis (exit 0; the real run joined to itself), and the diagnosis
+    said "mend the probes". One line naming the file and the row instead, nothing written, from
+    the command line, `Machine.identify`, `diagnose` and `Machine.calibrate` alike."""
+    c = syn.make_case("lathe", "none", 1, hours=(3.0, 1.0), dt=DT_S)
+    n = len(c.train["time_s"])
+    run = tmp_path / "joined.csv"
+    syn.write_run_csv(run, _joined(c.train))
+    out = tmp_path / "m.toml"
+    assert main(["init", str(run), "--out", str(out)]) == 2
+    err = [x for x in capsys.readouterr().err.splitlines() if x.startswith("thermerr: error:")]
+    assert len(err) == 1, err
+    assert f"joined.csv, row {n + 1}: " in err[0] and "step at once" in err[0], err[0]
+    assert "a second run appended to the first?" in err[0], err[0]
+    assert not out.exists()
+    joined = _run(_joined(c.train), "joined.csv")
+    with pytest.raises(DataError, match=rf"joined\.csv, row {n + 1}: .* columns step at once"):
+        Machine.identify(joined)
+    nominal = Machine.from_toml(c.nominal_toml())
+    with pytest.raises(DataError, match=rf"joined\.csv, row {n + 1}: "):
+        diagnose(joined, nominal)
+    with pytest.raises(DataError, match=rf"joined\.csv, row {n + 1}: "):
+        diagnose(_run(c.train, "train.csv"), nominal, joined)
+    with pytest.raises(DataError, match=rf"joined\.csv, row {n + 1}: "):
+        nominal.calibrate(joined)
+    # the run alone is one run; the clock starting again is the reader's refusal, saying why
+    Machine.identify(_run(c.train, "train.csv"))
+    syn.write_run_csv(run, _joined(c.train, restart_clock=True))
+    assert main(["init", str(run), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"row {n + 1}, column `time_s`: time is not strictly increasing" in err, err
+    assert "back to the first row's: a second run appended to the first?" in err, err
+    assert not out.exists()
+
+
 def test_python_bad_input_is_a_thermerr_error():
     c = syn.make_case("lathe", "none", 1, hours=(3.0, 1.0), dt=DT_S)
     run = _run(c.train, "bad.csv")

@@ -653,6 +653,20 @@ pub const JUMP_FACTOR: f64 = 20.0;
 /// (15 s, 16 temperatures, 5 probes) the largest step of any column is 2.9 K (a fast sensor
 /// whose 99th percentile is 0.52 K: 5.5 times it), of any probe 0.79 µm.
 pub const JUMP_FLOOR: f64 = 2.0;
+/// A column steps where two runs were joined ([`one_run`]) when it moves by this many units
+/// (K, µm) or more between two readings (above a 0.1-K logger's tick; on the real 46-h run
+/// joined to itself the smallest step back at the join is T_t11's 0.36 K) ...
+pub const JOIN_FLOOR: f64 = 0.2;
+/// ... and that step is either this many times both steps beside it (a jump out of the column's
+/// course, where heat moves a temperature over several readings alike) ...
+pub const JOIN_ALONE: f64 = 5.0;
+/// ... or faster than this many times the column's 99th percentile of rates (half a jump's
+/// [`JUMP_FACTOR`]: the first steps of a run that starts with the spindle on are as fast as
+/// the step back at the join), and the column does not come back within half the step over
+/// the next [`JOIN_AFTER`] readings (a row the logger garbled is a spike in every column).
+pub const JOIN_FACTOR: f64 = 10.0;
+/// Readings after a step over which a column must stay away ([`JOIN_FACTOR`]).
+pub const JOIN_AFTER: usize = 10;
 
 /// A step of the time axis this many times the median step, and at least [`GAP_FLOOR_S`], is a
 /// gap in the log.
@@ -683,11 +697,17 @@ pub fn jump_rows(col: &[f64], time: &[f64]) -> Vec<usize> {
 }
 
 fn jump_rows_at(col: &[f64], time: &[f64], step: f64) -> Vec<usize> {
+    steps_beyond(col, time, step, JUMP_FACTOR, JUMP_FLOOR)
+}
+
+/// The rows where `col` steps faster than `factor` times its 99th percentile of rates and more
+/// than `floor` units per median `step`.
+fn steps_beyond(col: &[f64], time: &[f64], step: f64, factor: f64, floor: f64) -> Vec<usize> {
     let n = time.len();
     // the limit is never below the floor: a column whose every rate is within it has no jump
     // (most columns; this pass allocates nothing, and runs once per simulation on the columns
     // that drive the network: by a product, with a margin far above its rounding)
-    let floor = JUMP_FLOOR / step;
+    let floor = floor / step;
     let safe = 0.999 * floor;
     if (1..n).all(|i| (col[i] - col[i - 1]).abs() <= safe * (time[i] - time[i - 1])) {
         return Vec::new();
@@ -701,7 +721,7 @@ fn jump_rows_at(col: &[f64], time: &[f64], step: f64) -> Vec<usize> {
     let at =
         (((sorted.len() - 1) as f64 * 0.99).round() as usize).min(sorted.len().saturating_sub(5));
     let (_, &mut q99, _) = sorted.select_nth_unstable_by(at, f64::total_cmp);
-    let limit = (JUMP_FACTOR * q99).max(floor);
+    let limit = (factor * q99).max(floor);
     (1..n).filter(|&i| rates[i - 1] > limit).collect()
 }
 
@@ -777,6 +797,78 @@ fn failing_of(col: &[f64], time: &[f64], jumps: &[usize]) -> Vec<std::ops::Range
         out.push(start..col.len());
     }
     out
+}
+
+/// What a run is, for a file that holds more than one: said when the time goes back to the first row's
+/// (the run reader) and when most columns jump at one row ([`one_run`]).
+pub const ONE_RUN: &str = "a second run appended to the first? A run is one stretch of the machine's time, simulated from its first readings: give each run as a file of its own (the diagnosis takes a second as --holdout)";
+
+/// Refuses a run in which at least half of `cols` (three or more) step at the same row
+/// ([`JOIN_FLOOR`], [`JOIN_ALONE`], [`JOIN_FACTOR`], [`JOIN_AFTER`]), other than after a gap in
+/// the log (which is said as one): one sensor's fault moves one column (a logger module's, the
+/// few on it), and heat moves a temperature over several readings; most temperatures and probes
+/// stepping at once between two readings and staying there is the machine's state changing
+/// under the log: two runs joined into one file with its clock running on, or the log resumed
+/// after the machine was reset. Taken as sensor faults, those columns would fail from there on
+/// and nothing after it would be fitted or scored; simulated through, the network would be
+/// asked to jump. A join where the machine is back about where the first run started (cooled
+/// over a night) is no such step, and the network runs through it as through one run. One line
+/// naming the file, the row and the columns.
+pub fn one_run(source: &str, names: &[&str], cols: &[&[f64]], time: &[f64]) -> Result<()> {
+    let n = time.len();
+    if n < 3 || cols.len() < 3 {
+        return Ok(());
+    }
+    let step = median_step(time).unwrap_or(1.0).max(f64::MIN_POSITIVE);
+    let gap_limit = (GAP_FACTOR * step).max(GAP_FLOOR_S);
+    let mut at: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+    for (c, col) in cols.iter().enumerate() {
+        if col.len() != n || col.iter().any(|v| !v.is_finite()) {
+            continue;
+        }
+        let d = |i: usize| (col[i] - col[i - 1]).abs();
+        let fast = steps_beyond(col, time, step, JOIN_FACTOR, 0.0);
+        for j in 1..n {
+            let a = d(j);
+            if a < JOIN_FLOOR || time[j] - time[j - 1] >= gap_limit {
+                continue;
+            }
+            let beside =
+                if j >= 2 { d(j - 1) } else { 0.0 }.max(if j + 1 < n { d(j + 1) } else { 0.0 });
+            let stays = col[j..n.min(j + JOIN_AFTER)]
+                .iter()
+                .all(|v| (v - col[j - 1]).abs() > 0.5 * a);
+            if stays && (a >= JOIN_ALONE * beside || fast.binary_search(&j).is_ok()) {
+                at.entry(j).or_default().push(c);
+            }
+        }
+    }
+    let need = cols.len().div_ceil(2).max(3);
+    let Some((&row, which)) = at.iter().find(|(_, w)| w.len() >= need) else {
+        return Ok(());
+    };
+    let show: Vec<String> = which
+        .iter()
+        .take(4)
+        .map(|&c| {
+            let (name, col) = (names[c], cols[c]);
+            let unit = if name.starts_with("E_") { "µm" } else { "K" };
+            format!("{name} by {:.3} {unit}", col[row] - col[row - 1])
+        })
+        .collect();
+    Err(Error::Parse {
+        file: source.to_string(),
+        line: None,
+        row: Some(row as u64 + 1),
+        column: None,
+        reason: format!(
+            "{} of the {} temperature and probe columns step at once, each far faster than it moves otherwise ({}{}), where a sensor's fault moves its own column: the machine's state changed between two readings, {ONE_RUN}",
+            which.len(),
+            cols.len(),
+            show.join(", "),
+            if which.len() > show.len() { ", ..." } else { "" },
+        ),
+    })
 }
 
 /// A probe's first right reading (not in `failing`) when it is further from zero than the probe

@@ -276,7 +276,7 @@ impl Run {
                 return Err(at(i, t_name, "time is missing".into()));
             }
             if i > 0 && *t <= time[i - 1] {
-                let reason = match kind {
+                let mut reason = match kind {
                     TimeKind::Seconds => format!(
                         "time is not strictly increasing ({} after {})",
                         t,
@@ -287,6 +287,12 @@ impl Run {
                         t - time[i - 1]
                     ),
                 };
+                if *t <= time[0] {
+                    reason.push_str(&format!(
+                        ", back to the first row's: {}",
+                        crate::guard::ONE_RUN
+                    ));
+                }
                 return Err(at(i, t_name, reason));
             }
         }

@@ -251,6 +251,7 @@ impl PyMachine {
             let view = RunView::new(&run);
             self.inner
                 .check_columns(&self.file, &run.source, |c| view.has(c))?;
+            view.one_run()?;
             let cal = calibrate(&self.inner, &view, &opts, None)?;
             // the axis's RMS over the rows its probe reads, from the fitted start and from the
             // first readings as they are (where a simulation of a run starts)

@@ -655,3 +655,38 @@ fn a_probe_that_moves_by_less_than_a_micron_is_said_to_be_in_another_unit() {
         vec![SuspectKind::Constant]
     );
 }
+
+/// Two warm-ups joined, the clock running on: every column steps back to its cold reading at
+/// row 481, by less than a sensor's jump. Two columns of six stepping at one row (a logger
+/// module's, the few on it) are not a second run.
+#[test]
+fn every_column_stepping_at_one_row_is_a_second_run_joined_but_two_are_faults() {
+    let (t, y) = warming(960);
+    let joined: Vec<Vec<f64>> = (0..6)
+        .map(|c| {
+            (0..960)
+                // steps back of 0.9-1.9 K (µm): under the jump floor, as at the real run's join
+                .map(|i| (0.2 + 0.05 * c as f64) * y[i % 480] + c as f64)
+                .collect()
+        })
+        .collect();
+    let names = ["E_x", "T_a", "T_b", "T_c", "T_d", "T_e"];
+    let cols: Vec<&[f64]> = joined.iter().map(Vec::as_slice).collect();
+    let e = one_run("run.csv", &names, &cols, &t)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("run.csv, row 481: 6 of the 6 temperature and probe columns step at once, each far faster than it moves otherwise (E_x by -"),
+        "{e}"
+    );
+    assert!(e.contains("a second run appended to the first?"), "{e}");
+    // two of six stepping at row 481, the others warming on: not a second run
+    let (_, clean) = warming(960);
+    let mut cols: Vec<&[f64]> = vec![clean.as_slice(); 6];
+    cols[0] = &joined[0];
+    cols[3] = &joined[3];
+    one_run("run.csv", &names, &cols, &t).unwrap();
+    // three of six is half: a second run
+    cols[5] = &joined[5];
+    assert!(one_run("run.csv", &names, &cols, &t).is_err());
+}

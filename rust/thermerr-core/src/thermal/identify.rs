@@ -1053,6 +1053,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     let file = run.source.clone();
     let mut ck = check_input(run, opts)?;
     let view = RunView::new(run);
+    view.one_run()?;
     let n = run.time_s.len();
     let frac = opts.train_fraction.clamp(0.1, 1.0);
     let m = ((n as f64 * frac).floor() as usize).clamp(10, n);

@@ -60,6 +60,21 @@ impl<'a> RunView<'a> {
         }
     }
 
+    /// Refuses a file that holds two runs joined, its clock running on
+    /// ([`crate::guard::one_run`] on every `T_*` and `E_*` column): what a network is fitted or
+    /// diagnosed on is one run.
+    pub fn one_run(&self) -> Result<()> {
+        let mut names: Vec<&str> = self
+            .cols
+            .keys()
+            .copied()
+            .filter(|c| c.starts_with("T_") || c.starts_with("E_"))
+            .collect();
+        names.sort_unstable();
+        let cols: Vec<&[f64]> = names.iter().map(|c| self.cols[c]).collect();
+        crate::guard::one_run(&self.source, &names, &cols, self.time)
+    }
+
     /// Input `name`'s values through `f`, one per row, for the forcing of the step that starts
     /// there: on a thinned view the weighted mean over the original rows of the step
     /// ([`StepInput`]), else the row's own.

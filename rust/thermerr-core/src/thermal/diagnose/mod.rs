@@ -741,7 +741,14 @@ pub fn diagnose(
     hold: Option<&RunView<'_>>,
     opts: &DiagnoseOptions,
 ) -> Result<Diagnosis> {
+    one_run(train, hold)?;
     diagnose_on(m, None, train, hold, opts, &MateMemo::default())
+}
+
+/// Refuses a training or held-out run that holds two runs joined ([`RunView::one_run`]).
+fn one_run(train: &RunView<'_>, hold: Option<&RunView<'_>>) -> Result<()> {
+    train.one_run()?;
+    hold.map_or(Ok(()), RunView::one_run)
 }
 
 /// The training rows of a diagnosis: all of `train` when a separate held-out run is given,
@@ -1116,6 +1123,7 @@ pub fn diagnose_axes(
     axes: &[String],
     opts: &DiagnoseOptions,
 ) -> Result<(Vec<Diagnosis>, Vec<SkippedAxis>)> {
+    one_run(train, hold)?;
     let every = axes.is_empty();
     let mut axes: Vec<String> = if every {
         m.drift.iter().map(|d| d.axis.clone()).collect()
