@@ -512,6 +512,12 @@ def test_cli_init_writes_and_prints(tmp_path, capsys):
     assert "note: held out, this network leaves more than 2x the probe noise on E_x (" in text
     assert "--nodes N" in text and "# note: held out" in (tmp_path / "one.toml").read_text()
     assert out.read_text().startswith("# Identified by `thermerr init`")
+    # --quiet drops the chatter (the choices, the notes), keeps the results (it printed nothing)
+    assert main(["init", str(run), "--axis", "E_x", "--out", str(tmp_path / "q.toml"), "--quiet"]) == 0
+    cap = capsys.readouterr()
+    lines = cap.out.splitlines()
+    assert [x.split(":")[0] for x in lines] == ["E_x", f"wrote {tmp_path / 'q.toml'}"], lines
+    assert "held-out RMS" in lines[0] and cap.err == "", cap.err
 
 
 def _bad_runs(tmp_path, c):

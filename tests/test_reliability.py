@@ -328,3 +328,23 @@ def test_a_semicolon_file_reads_with_delimiter_and_says_so_without(example_run1,
     assert r.returncode == 0, r.stderr
     same = _cli("select-sensors", str(example_run1), "--axis", "E_z", "--json")
     assert json.loads(r.stdout) == json.loads(same.stdout)
+
+
+def test_a_decimal_comma_file_reads_with_decimal_and_says_how_without(example_run1, tmp_path):
+    """A spreadsheet in a German or French locale writes `;` between fields and `20,5` for 20.5:
+    read with `--decimal ,` (`decimal=","`) it is the same run to the last digit; without it the
+    refusal names the cell and the option; a comma for both is refused as a usage error."""
+    de = tmp_path / "de.csv"
+    de.write_text(example_run1.read_text().replace(",", ";").replace(".", ","))
+    r = _cli("select-sensors", str(de), "--axis", "E_z", "--json", "--delimiter", ";")
+    assert r.returncode == 2 and 'de.csv, line 2, row 1, column `time_s`: "0,0" is not a number' in r.stderr, r.stderr
+    assert "is not a number (a decimal comma? read the file with --decimal ," in r.stderr, r.stderr
+    r = _cli("select-sensors", str(de), "--axis", "E_z", "--json", "--delimiter", ";", "--decimal", ",")
+    assert r.returncode == 0, r.stderr
+    same = _cli("select-sensors", str(example_run1), "--axis", "E_z", "--json")
+    assert json.loads(r.stdout) == json.loads(same.stdout)
+    a, b = tr.read_run(de, delimiter=";", decimal=","), tr.read_run(example_run1)
+    assert a.names == b.names and np.array_equal(a.time_s, b.time_s)
+    assert np.array_equal(a.matrix(a.names), b.matrix(b.names))
+    with pytest.raises(tr.ThermerrError, match="decimal comma needs another field delimiter"):
+        tr.read_run(de, decimal=",")

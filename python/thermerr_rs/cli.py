@@ -72,7 +72,7 @@ def _print_json(obj: Any) -> None:
 
 
 def _read(args: argparse.Namespace, path: str) -> Run:
-    run = read_run(path, nan=args.nan, delimiter=args.delimiter)
+    run = read_run(path, nan=args.nan, delimiter=args.delimiter, decimal=args.decimal)
     # what --nan changed is said: a result read from mended rows is not a result of the file
     if not getattr(args, "quiet", False):
         if run.interpolated:
@@ -537,12 +537,13 @@ def cmd_init(args: argparse.Namespace) -> int:
         v = a["holdout_rmse_um"]  # None: the probe reads none of the held-out rows
         held = (f"{v:.3f} µm (no compensation: {a['holdout_uncompensated_um']:.3f} µm)"
                 if isinstance(v, float) and math.isfinite(v) else "none (its probe reads none of the held-out rows)")
-        _say(args, f"{a['axis']}: training RMS {a['train_rmse_um']:.3f} µm, "
-                   f"held-out RMS {held} (last {s['holdout_rows']} rows; "
-                   f"probe noise {a['noise_um']:.2f} µm; simulated from the first readings, as any run is)")
+        # the results: printed under --quiet too, as every command's are
+        print(f"{a['axis']}: training RMS {a['train_rmse_um']:.3f} µm, "
+              f"held-out RMS {held} (last {s['holdout_rows']} rows; "
+              f"probe noise {a['noise_um']:.2f} µm; simulated from the first readings, as any run is)")
     for note in s["notes"]:
         _say(args, f"note: {note}")
-    _say(args, f"wrote {args.out}")
+    print(f"wrote {args.out}")
     return 0
 
 
@@ -559,11 +560,12 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     if args.json:
         _print_json(info)
         return 0
-    _say(args, f"calibrated {args.machine} on {run.source} ({info['n_iter']} iterations, "
-               f"normalised RMS residual {(info['ssr'] / info['n_data']) ** 0.5:.2f}); wrote {args.out}")
-    _say(args, f"{axis}: RMS {info['rmse_um']:.3f} µm on {run.source} from the start fitted with the values ([start] "
-               f"in {args.out}; thermerr predict --start fitted), {info['first_reading_rmse_um']:.3f} µm from the "
-               "first readings as they are")
+    # the results: printed under --quiet too, as every command's are
+    print(f"calibrated {args.machine} on {run.source} ({info['n_iter']} iterations, "
+          f"normalised RMS residual {(info['ssr'] / info['n_data']) ** 0.5:.2f}); wrote {args.out}")
+    print(f"{axis}: RMS {info['rmse_um']:.3f} µm on {run.source} from the start fitted with the values ([start] "
+          f"in {args.out}; thermerr predict --start fitted), {info['first_reading_rmse_um']:.3f} µm from the "
+          "first readings as they are")
     if not info["converged"]:
         _say(args, f"note: the search stopped at its iteration limit ({info['n_iter']}) without settling: the values "
                    "are where it stopped, not a solution to rely on")
@@ -723,6 +725,9 @@ def build_parser() -> argparse.ArgumentParser:
                              "remove their rows (drop: one blank cell takes the whole row)")
         sp.add_argument("--delimiter", type=_delimiter, default=",",
                         help="field separator of the run CSVs: ',' (default), ';', 'tab', ...")
+        sp.add_argument("--decimal", choices=[".", ","], default=".",
+                        help="decimal mark of the run CSVs: '.' (default) or ',' (20,5 as a "
+                             "spreadsheet in a German or French locale writes it, with --delimiter ';')")
         sp.add_argument("--quiet", action="store_true", help="no progress or chatter (the results are still printed; --json prints only them)")
         sp.add_argument("--json", action="store_true", help="print results as JSON")
 

@@ -255,7 +255,8 @@ class Run:
         )
 
 
-def read_run(path: str | os.PathLike[str], nan: NanPolicy = "error", *, delimiter: str = ",") -> Run:
+def read_run(path: str | os.PathLike[str], nan: NanPolicy = "error", *, delimiter: str = ",",
+             decimal: str = ".") -> Run:
     """Read and validate a run CSV (formats.md, "Measured run").
 
     ``nan``: ``"error"`` (default) refuses a missing value, naming its row and column;
@@ -263,6 +264,8 @@ def read_run(path: str | os.PathLike[str], nan: NanPolicy = "error", *, delimite
     Every refusal names the file, and the row and column where there is one. Columns without a
     ``T_``/``E_``/``U_`` prefix are ignored with a warning. ``delimiter``: the field separator
     (``";"`` for files from a spreadsheet set to a decimal comma's locale, ``"\t"``, ...); a
-    header that looks separated by another one says so.
+    header that looks separated by another one says so. ``decimal``: the decimal mark, ``"."``
+    (default) or ``","`` (``20,5`` for 20.5, as such a spreadsheet writes; then a point in a
+    number is refused, not read as a thousands separator).
     """
-    return Run(_core.read_run(os.fspath(path), nan, delimiter))
+    return Run(_core.read_run(os.fspath(path), nan, delimiter, decimal))

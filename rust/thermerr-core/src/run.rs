@@ -35,6 +35,60 @@ impl std::str::FromStr for NanPolicy {
     }
 }
 
+/// How a run's CSV is written: its field delimiter and its decimal mark. A spreadsheet saved in a
+/// German or French locale writes `20,5` for 20.5 and separates fields by `;`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Dialect {
+    pub delimiter: u8,
+    /// `b'.'` or `b','`.
+    pub decimal: u8,
+}
+
+impl Default for Dialect {
+    fn default() -> Self {
+        Dialect {
+            delimiter: b',',
+            decimal: b'.',
+        }
+    }
+}
+
+impl Dialect {
+    /// The dialect named by a delimiter (one ASCII character, not a quote or a line end) and a
+    /// decimal mark (`.` or `,`, not the delimiter): the one check behind every reader's
+    /// options.
+    pub fn new(delimiter: &str, decimal: &str) -> Result<Dialect> {
+        let delimiter = match delimiter.as_bytes() {
+            [b] if b.is_ascii() && !matches!(b, b'"' | b'\n' | b'\r') => *b,
+            _ => {
+                return Err(Error::param(
+                    "delimiter",
+                    format!(
+                        "must be one ASCII character (not a quote or newline), got {delimiter:?}"
+                    ),
+                ))
+            }
+        };
+        let decimal = match decimal {
+            "." => b'.',
+            "," => b',',
+            _ => {
+                return Err(Error::param(
+                    "decimal",
+                    format!("must be \".\" or \",\", got {decimal:?}"),
+                ))
+            }
+        };
+        if decimal == delimiter {
+            return Err(Error::param(
+                "decimal",
+                "a decimal comma needs another field delimiter (\";\" as a spreadsheet in that locale writes, or tab)",
+            ));
+        }
+        Ok(Dialect { delimiter, decimal })
+    }
+}
+
 /// The prefixes of the columns a run carries.
 pub const PREFIXES: [&str; 3] = ["T_", "E_", "U_"];
 
@@ -63,16 +117,16 @@ impl Run {
     /// Reads a CSV file. Every refusal names the file, and the row/line and column where there is
     /// one.
     pub fn read_csv(path: &Path, nan: NanPolicy) -> Result<Run> {
-        Run::read_csv_with(path, nan, b',')
+        Run::read_csv_with(path, nan, Dialect::default())
     }
 
-    /// [`Run::read_csv`] with another field delimiter (`b';'`, `b'\t'`, ...).
-    pub fn read_csv_with(path: &Path, nan: NanPolicy, delimiter: u8) -> Result<Run> {
+    /// [`Run::read_csv`] with another field delimiter (`b';'`, `b'\t'`, ...) or decimal mark.
+    pub fn read_csv_with(path: &Path, nan: NanPolicy, dialect: Dialect) -> Result<Run> {
         let file = std::fs::File::open(path).map_err(|source| Error::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        Run::from_csv_reader_with(file, &path.display().to_string(), nan, delimiter)
+        Run::from_csv_reader_with(file, &path.display().to_string(), nan, dialect)
     }
 
     /// Reads CSV text from any reader (a file, stdin, bytes in memory): the one parser behind
@@ -82,16 +136,17 @@ impl Run {
         source: &str,
         nan: NanPolicy,
     ) -> Result<Run> {
-        Run::from_csv_reader_with(reader, source, nan, b',')
+        Run::from_csv_reader_with(reader, source, nan, Dialect::default())
     }
 
-    /// [`Run::from_csv_reader`] with another field delimiter.
+    /// [`Run::from_csv_reader`] with another field delimiter or decimal mark.
     pub fn from_csv_reader_with<R: std::io::Read>(
         mut reader: R,
         source: &str,
         nan: NanPolicy,
-        delimiter: u8,
+        dialect: Dialect,
     ) -> Result<Run> {
+        let delimiter = dialect.delimiter;
         let file = source.to_string();
         let mut bytes = Vec::new();
         reader.read_to_end(&mut bytes).map_err(|source| Error::Io {
@@ -190,12 +245,16 @@ impl Run {
                     cells[j].push(v);
                     continue;
                 }
-                let v = parse_cell(cell).ok_or_else(|| Error::Parse {
+                let v = parse_with(cell, dialect.decimal).ok_or_else(|| Error::Parse {
                     file: file.clone(),
                     line: Some(line),
                     row: Some(row),
                     column: Some(names[j].clone()),
-                    reason: not_a_number(&names[j], cell),
+                    reason: if dialect.decimal == b',' {
+                        not_a_number_comma(cell)
+                    } else {
+                        not_a_number(&names[j], cell)
+                    },
                 })?;
                 cells[j].push(v);
             }
@@ -495,9 +554,42 @@ pub fn not_a_number(column: &str, cell: &str) -> String {
     let dotted = cell.trim().replacen(',', ".", 1);
     match parse_cell(&dotted) {
         Some(_) if cell.matches(',').count() == 1 => {
-            format!("{cell:?} is not a number (a decimal comma? write {dotted})")
+            format!(
+                "{cell:?} is not a number (a decimal comma? read the file with --decimal , \
+                 (decimal=\",\" in Python), or write {dotted})"
+            )
         }
         _ => format!("{cell:?} is not a number"),
+    }
+}
+
+/// The refusal of a cell that is not a number in a file read with a decimal comma.
+fn not_a_number_comma(cell: &str) -> String {
+    if cell.contains('.') {
+        format!(
+            "{cell:?} is not a number with a decimal comma (a point in it: the file writes \
+             decimal points, or thousands separators; read it without --decimal , or write the \
+             number without them)"
+        )
+    } else {
+        format!("{cell:?} is not a number")
+    }
+}
+
+/// A cell's number under the decimal mark `decimal` (`b'.'` or `b','`): with a comma, one comma
+/// is the decimal mark and a point is refused (a thousands separator, or a file that writes
+/// points after all: neither read as the other).
+fn parse_with(cell: &str, decimal: u8) -> Option<f64> {
+    if decimal != b',' {
+        return parse_cell(cell);
+    }
+    if cell.contains('.') {
+        return None;
+    }
+    match cell.matches(',').count() {
+        0 => parse_cell(cell),
+        1 => parse_cell(&cell.replacen(',', ".", 1)),
+        _ => None,
     }
 }
 
@@ -669,9 +761,17 @@ mod tests {
     }
 
     fn read_err(text: &[u8], delimiter: u8) -> String {
-        Run::from_csv_reader_with(text, "t.csv", NanPolicy::Error, delimiter)
-            .unwrap_err()
-            .to_string()
+        Run::from_csv_reader_with(
+            text,
+            "t.csv",
+            NanPolicy::Error,
+            Dialect {
+                delimiter,
+                ..Dialect::default()
+            },
+        )
+        .unwrap_err()
+        .to_string()
     }
 
     fn err(text: &[u8], nan: NanPolicy) -> String {
@@ -706,7 +806,8 @@ mod tests {
             &b"time_s,note,T_a\n1,\"a, \"\"b\"\"\",2\n2,x,3\n"[..],
             &b"time_s,note,T_a\n1,12\",2\n2,x,3\n"[..],
         ] {
-            let r = Run::from_csv_reader_with(text, "t.csv", NanPolicy::Error, b',').unwrap();
+            let r = Run::from_csv_reader_with(text, "t.csv", NanPolicy::Error, Dialect::default())
+                .unwrap();
             assert_eq!(r.len(), 2);
         }
         assert_eq!(unclosed_quote(b"1,\"a\"\"\"\n2,3", b','), None);
@@ -766,7 +867,7 @@ mod tests {
         let e = read_err(b"time_s;T_a\n0;20,5\n", b';');
         assert!(
             e.contains("row 1")
-                && e.contains("\"20,5\" is not a number (a decimal comma? write 20.5)"),
+                && e.contains("\"20,5\" is not a number (a decimal comma? read the file with --decimal , (decimal=\",\" in Python), or write 20.5)"),
             "{e}"
         );
         let e = read_err(b"time_s;T_a\n0;1,2,3\n", b';');
@@ -888,12 +989,46 @@ mod tests {
     #[test]
     fn reads_other_delimiters_and_says_which_one_is_likely() {
         let text = b"time_s;T_a;E_z\n0;20;0\n15;21;1.5\n";
-        let r = Run::from_csv_reader_with(&text[..], "semi.csv", NanPolicy::Error, b';').unwrap();
+        let semi = Dialect::new(";", ".").unwrap();
+        let r = Run::from_csv_reader_with(&text[..], "semi.csv", NanPolicy::Error, semi).unwrap();
         assert_eq!(r.column("E_z").unwrap(), &[0.0, 1.5]);
         let e = Run::from_csv_reader(&text[..], "semi.csv", NanPolicy::Error)
             .unwrap_err()
             .to_string();
         assert!(e.contains("semi.csv") && e.contains("';'"), "{e}");
+    }
+
+    /// A spreadsheet in a German or French locale: `;` between fields, a comma for the decimals.
+    /// Read with its decimal mark, each number is the one written; without it, the refusal says
+    /// how; with it, a point (a thousands separator, or a file of points after all) is refused,
+    /// not read as a comma would be.
+    #[test]
+    fn reads_a_decimal_comma_when_asked_and_says_how_when_not() {
+        let text = b"time_s;T_a;E_z\n0;20,5;-0,25\n15;21;1,5e1\n30;NaN;2\n";
+        let comma = Dialect::new(";", ",").unwrap();
+        let r =
+            Run::from_csv_reader_with(&text[..], "de.csv", NanPolicy::Interpolate, comma).unwrap();
+        assert_eq!(r.time_s, [0.0, 15.0, 30.0]);
+        assert_eq!(r.column("T_a").unwrap(), &[20.5, 21.0, 21.0]);
+        assert_eq!(r.column("E_z").unwrap(), &[-0.25, 15.0, 2.0]);
+        let semi = Dialect::new(";", ".").unwrap();
+        let e = Run::from_csv_reader_with(&text[..], "de.csv", NanPolicy::Error, semi)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("de.csv, line 2, row 1, column `T_a`: \"20,5\" is not a number (a decimal comma? read the file with --decimal ,"),
+            "{e}"
+        );
+        for cell in ["1.020,5", "20.5", "1,2,3"] {
+            let t = format!("time_s;T_a\n0;{cell}\n");
+            let e = Run::from_csv_reader_with(t.as_bytes(), "de.csv", NanPolicy::Error, comma)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(&format!("{cell:?} is not a number")), "{e}");
+        }
+        assert!(Dialect::new(",", ",").is_err());
+        assert!(Dialect::new(";", "x").is_err());
+        assert!(Dialect::new("\"", ".").is_err());
     }
 
     #[test]

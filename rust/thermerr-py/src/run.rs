@@ -6,7 +6,7 @@ use numpy::{PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMe
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use thermerr_core::metrics;
-use thermerr_core::run::{NanPolicy, Run};
+use thermerr_core::run::{Dialect, NanPolicy, Run};
 
 use crate::{slice1, vec_to_py, PyErrWrap};
 
@@ -31,26 +31,16 @@ fn run_to_dict<'py>(py: Python<'py>, run: Run) -> PyResult<Bound<'py, PyDict>> {
 
 /// Reads and validates a run CSV; returns its pieces as a dict (the Python `Run` wraps it).
 #[pyfunction]
-#[pyo3(signature = (path, nan = "error", delimiter = ","))]
+#[pyo3(signature = (path, nan = "error", delimiter = ",", decimal = "."))]
 fn read_run<'py>(
     py: Python<'py>,
     path: PathBuf,
     nan: &str,
     delimiter: &str,
+    decimal: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let policy: NanPolicy = nan.parse().map_err(PyErrWrap)?;
-    let d = match delimiter.as_bytes() {
-        [b] if b.is_ascii() && *b != b'"' && *b != b'\n' && *b != b'\r' => *b,
-        _ => {
-            return Err(PyErrWrap(thermerr_core::Error::InvalidParam {
-                name: "delimiter",
-                reason: format!(
-                    "must be one ASCII character (not a quote or newline), got {delimiter:?}"
-                ),
-            })
-            .into())
-        }
-    };
+    let d = Dialect::new(delimiter, decimal).map_err(PyErrWrap)?;
     let run = crate::detach(py, || Run::read_csv_with(&path, policy, d))?;
     run_to_dict(py, run)
 }
