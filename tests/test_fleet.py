@@ -367,3 +367,24 @@ def test_ctrl_c_stops_a_fleet_on_threads_and_nothing_is_written_after_it(tmp_pat
     assert "after True" in stdout, (stdout, err)
     assert not list(out.glob("*.json")) if out.exists() else True  # no model, no summary
     assert waited < 20, waited
+
+
+def test_every_task_reads_its_run_with_the_delimiter_and_decimal_given(runs, tmp_path, capsys):
+    """`thermerr fleet` took --delimiter (and --decimal) and read every run with a comma all the
+    same: each run of a German spreadsheet failed on its header. Now each task reads as told, and
+    the figures are those of the same runs written with points."""
+    d, de = tmp_path / "dot", tmp_path / "de"
+    d.mkdir()
+    de.mkdir()
+    for n in GOOD[:2]:
+        shutil.copy(runs / f"{n}.csv", d / f"{n}.csv")
+        (de / f"{n}.csv").write_text((runs / f"{n}.csv").read_text().replace(",", ";").replace(".", ","))
+    assert main(["fleet", "fit", str(d), "--axis", "E_z", "--out", str(tmp_path / "o1"), "--json"]) == 0
+    dot = json.loads(capsys.readouterr().out)
+    assert main(["fleet", "fit", str(de), "--axis", "E_z", "--out", str(tmp_path / "o2"), "--json",
+                 "--delimiter", ";", "--decimal", ","]) == 0
+    comma = json.loads(capsys.readouterr().out)
+    assert [r["figures"] for r in comma["runs"]] == [r["figures"] for r in dot["runs"]]
+    rows = fleet.evaluate_runs(tmp_path / "o1" / "m01.json", de, delimiter=";", decimal=",")
+    assert all(r.ok for r in rows) and rows[1].figures == fleet.evaluate_runs(
+        tmp_path / "o1" / "m01.json", d)[1].figures

@@ -667,7 +667,8 @@ def cmd_fleet(args: argparse.Namespace) -> int:
 
     if args.scheduler is not None and args.workers is not None:
         raise ThermerrError("--workers sets the local scheduler's threads; with --scheduler the cluster has its own")
-    sched = {"scheduler": args.scheduler, "workers": args.workers, "nan": args.nan}
+    sched = {"scheduler": args.scheduler, "workers": args.workers, "nan": args.nan, "delimiter": args.delimiter,
+             "decimal": args.decimal}
     if args.fleet_command == "fit":
         sensors: Any = args.sensors if args.sensors in ("all", "auto") else [
             s.strip() for s in args.sensors.split(",") if s.strip()]

@@ -240,13 +240,13 @@ def _build(model: str | Estimator, params: Mapping[str, Any], seed: int, y: Any)
 
 
 def _fit_task(path: str, axis: str, model: str | Estimator, params: Mapping[str, Any],
-              sensors: Sequence[str] | str | None, seed: int, inputs: str, nan: str, n_clusters: int,
-              out_dir: str) -> RunResult:
+              sensors: Sequence[str] | str | None, seed: int, inputs: str, reading: dict[str, str],
+              n_clusters: int, out_dir: str) -> RunResult:
     def work() -> tuple[str | None, dict[str, Any]]:
         from .metrics import scores
         from .run import read_run
 
-        run = read_run(path, nan=nan)  # type: ignore[arg-type]
+        run = read_run(path, **reading)  # type: ignore[arg-type]
         y = run[axis]
         if sensors in (None, "all"):
             names = run.temperatures
@@ -270,14 +270,14 @@ def _fit_task(path: str, axis: str, model: str | Estimator, params: Mapping[str,
     return _guarded(path, work)
 
 
-def _evaluate_task(path: str, model_json: str, axis: str | None, nan: str) -> RunResult:
+def _evaluate_task(path: str, model_json: str, axis: str | None, reading: dict[str, str]) -> RunResult:
     def work() -> tuple[str | None, dict[str, Any]]:
         from .base import _from_text
         from .metrics import scores
         from .run import read_run
 
         model = _from_text(model_json)
-        run = read_run(path, nan=nan)  # type: ignore[arg-type]
+        run = read_run(path, **reading)  # type: ignore[arg-type]
         target = axis or model.target_name_
         if not target:
             raise ThermerrError("the model does not record its target axis: pass axis")
@@ -296,13 +296,13 @@ def _diagnosis_figures(d: Any) -> dict[str, Any]:
 
 
 def _diagnose_task(path: str, machine_toml: str, machine_file: str, axes: list[str],
-                   holdout_fraction: float, nan: str, out_dir: str, network: str) -> RunResult:
+                   holdout_fraction: float, reading: dict[str, str], out_dir: str, network: str) -> RunResult:
     def work() -> tuple[str | None, dict[str, Any]]:
         from .run import read_run
         from .thermal import Machine, diagnose, diagnose_axes
 
         machine = Machine.from_toml(machine_toml, machine_file)
-        run = read_run(path, nan=nan)  # type: ignore[arg-type]
+        run = read_run(path, **reading)  # type: ignore[arg-type]
         target = Path(out_dir) / Path(path).stem
         todo = axes or machine.axes
         if len(todo) == 1:
@@ -457,6 +457,12 @@ def table(results: Sequence[RunResult]) -> str:
     return "\n".join(line.rstrip() for line in out)
 
 
+def _reading(nan: str, delimiter: str, decimal: str) -> dict[str, str]:
+    """How every task reads its run (:func:`~thermerr_rs.read_run`'s ``nan``, ``delimiter`` and
+    ``decimal``)."""
+    return {"nan": nan, "delimiter": delimiter, "decimal": decimal}
+
+
 # -- the public functions --------------------------------------------------------------------
 
 Scheduler = Union[None, str, Any]
@@ -473,6 +479,8 @@ def fit_runs(
     seed: int = 0,
     inputs: Literal["rise", "absolute"] = "rise",
     nan: Literal["error", "drop", "interpolate"] = "error",
+    delimiter: str = ",",
+    decimal: str = ".",
     n_clusters: int = 4,
     scheduler: Scheduler = None,
     workers: int | None = None,
@@ -485,7 +493,8 @@ def fit_runs(
     estimator, cloned for every run. ``sensors``: ``None``/``"all"`` every ``T_*`` column,
     ``"auto"`` fuzzy c-means selection per run (``n_clusters``), or the column names. ``seed``
     seeds every stochastic step of every run alike. ``inputs``: the sensors' ``"rise"`` since
-    the run's start (default, as the CLI) or ``"absolute"`` readings. ``scheduler``/``workers``:
+    the run's start (default, as the CLI) or ``"absolute"`` readings. ``nan``, ``delimiter``,
+    ``decimal``: how each run is read, as :func:`~thermerr_rs.read_run`. ``scheduler``/``workers``:
     see the module's docstring.
 
     Returns one :class:`RunResult` per run, in input order; ``figures`` holds the training
@@ -497,7 +506,8 @@ def fit_runs(
         raise ThermerrError(f'inputs must be "rise" or "absolute", got {inputs!r}')
     paths = run_paths(runs)
     sens: Sequence[str] | str | None = sensors if sensors is None or isinstance(sensors, str) else list(sensors)
-    args = (axis, model, dict(params or {}), sens, int(seed), inputs, nan, int(n_clusters), str(out_dir))
+    args = (axis, model, dict(params or {}), sens, int(seed), inputs, _reading(nan, delimiter, decimal),
+            int(n_clusters), str(out_dir))
     results = _compute(_fit_task, paths, args, scheduler, workers, "fit")
     write_summary(results, out_dir)
     return results
@@ -510,6 +520,8 @@ def evaluate_runs(
     *,
     out_dir: str | os.PathLike[str] | None = None,
     nan: Literal["error", "drop", "interpolate"] = "error",
+    delimiter: str = ",",
+    decimal: str = ".",
     scheduler: Scheduler = None,
     workers: int | None = None,
 ) -> list[RunResult]:
@@ -525,7 +537,8 @@ def evaluate_runs(
     model = model_or_path if isinstance(model_or_path, Estimator) else load_model(model_or_path)
     text = model.to_json()  # each task reads its own copy: no model object shared between threads
     paths = run_paths(runs)
-    results = _compute(_evaluate_task, paths, (text, axis, nan), scheduler, workers, "evaluate")
+    results = _compute(_evaluate_task, paths, (text, axis, _reading(nan, delimiter, decimal)), scheduler, workers,
+                       "evaluate")
     if out_dir is not None:
         write_summary(results, out_dir)
     return results
@@ -539,6 +552,8 @@ def diagnose_runs(
     axis: str | Sequence[str] | None = None,
     holdout_fraction: float = 0.3,
     nan: Literal["error", "drop", "interpolate"] = "error",
+    delimiter: str = ",",
+    decimal: str = ".",
     network: str = "auto",
     scheduler: Scheduler = None,
     workers: int | None = None,
@@ -584,7 +599,8 @@ def diagnose_runs(
         raise ParameterError(f"axis: {', '.join(unknown) or 'none given'}: {source} maps "
                              f"{', '.join(m.axes) or 'no axis'}")
     # every axis: passed as none named, so that a run's dead probe is left out, not the run failed
-    args = (m.to_toml(), source, [] if axis is None else axes, float(holdout_fraction), nan, str(out_dir), network)
+    args = (m.to_toml(), source, [] if axis is None else axes, float(holdout_fraction),
+            _reading(nan, delimiter, decimal), str(out_dir), network)
     results = _compute(_diagnose_task, paths, args, scheduler, workers, "diagnose")
     write_summary(results, out_dir)
     return results
