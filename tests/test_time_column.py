@@ -63,7 +63,7 @@ def test_offsets_count_real_seconds_across_a_clock_change(tmp_path):
 
 
 @pytest.mark.parametrize(("cell", "why"), [
-    ("25.10.2025 22:00:15", "is not an ISO-8601 date-time"),
+    ("10/25/2025 22:00:15", "a date with slashes is day or month first by locale"),
     ("150", "a number of seconds belongs in a `time_s` column"),
     ("2025-10-25T22:00:15Z", "has a UTC offset but the column's first date-time does not"),
     ("", "time is missing"),
@@ -218,3 +218,16 @@ def test_what_nan_changed_is_said(tmp_path, capsys, nan, said):
     assert f"thermerr: {gap}: {said}" in capsys.readouterr().err
     assert main([*args, "--quiet"]) == 0
     assert "missing value" not in capsys.readouterr().err
+
+
+def test_a_day_first_date_with_dots_reads_as_the_same_clock(tmp_path):
+    """A logger or a spreadsheet in a German locale writes `04.03.2025 08:00:15` (with `;` and a
+    decimal comma): the same seconds as the ISO-8601 column, through the CSV reader and the CLI."""
+    iso = tmp_path / "iso.csv"
+    iso.write_text("time,T_a,E_x\n2025-03-04T23:59:45,20.5,0\n2025-03-05T00:00:00,21,1\n2025-03-05T00:00:15,22,2\n")
+    de = tmp_path / "de.csv"
+    de.write_text("time;T_a;E_x\n04.03.2025 23:59:45;20,5;0\n5.3.2025 0:00:00;21;1\n05.03.2025 00:00:15;22;2\n")
+    a, b = tr.read_run(iso), tr.read_run(de, delimiter=";", decimal=",")
+    np.testing.assert_array_equal(b.time_s, [0.0, 15.0, 30.0])
+    np.testing.assert_array_equal(a.time_s, b.time_s)
+    np.testing.assert_array_equal(a.matrix(a.names), b.matrix(b.names))

@@ -40,7 +40,9 @@ impl TimeKind {
 /// Reads the ISO-8601 date-times of one column, in order, as seconds since 1970-01-01T00:00:00Z.
 ///
 /// A cell is `YYYY-MM-DD`, then `T` or a space and `hh:mm[:ss[.fraction]]`, with or without a UTC
-/// offset (`Z`, `+01:00`). With an offset the instant is exact, so a run that crosses a change
+/// offset (`Z`, `+01:00`); or the date day first with dots, `DD.MM.YYYY hh:mm[:ss[.fraction]]`,
+/// as a logger or a spreadsheet in a German locale writes it (dots are day first in every
+/// locale that writes them; a date with slashes, day or month first by locale, is refused). With an offset the instant is exact, so a run that crosses a change
 /// of daylight saving time keeps counting real seconds. Without one the clock is read as it is
 /// written (no time zone is assumed), so such a change makes time jump or step back, which the
 /// run reader refuses naming the row. A column must stay with one style: a cell with an offset
@@ -63,9 +65,11 @@ impl IsoClock {
         if c.is_empty() || c.eq_ignore_ascii_case("nan") {
             return Ok(f64::NAN);
         }
-        let (ts, zoned) = match c.parse::<jiff::Timestamp>() {
+        let dotted = day_first(c);
+        let iso = dotted.as_deref().unwrap_or(c);
+        let (ts, zoned) = match iso.parse::<jiff::Timestamp>() {
             Ok(ts) => (ts, true),
-            Err(_) => match c.parse::<jiff::civil::DateTime>() {
+            Err(_) => match iso.parse::<jiff::civil::DateTime>() {
                 Ok(dt) => match jiff::tz::TimeZone::UTC.to_timestamp(dt) {
                     Ok(ts) => (ts, false),
                     Err(e) => return Err(format!("{c:?}: {e}")),
@@ -73,12 +77,16 @@ impl IsoClock {
                 Err(_) => {
                     let hint = if c.parse::<f64>().is_ok() {
                         " (a number of seconds belongs in a `time_s` column)"
+                    } else if c.contains('/') {
+                        " (a date with slashes is day or month first by locale: write it as \
+                         ISO-8601)"
                     } else {
                         ""
                     };
                     return Err(format!(
                         "{c:?} is not an ISO-8601 date-time such as 2025-03-04T08:00:15 or \
-                         2025-03-04 08:00:15+01:00{hint}"
+                         2025-03-04 08:00:15+01:00, nor a day-first one such as 04.03.2025 \
+                         08:00:15{hint}"
                     ));
                 }
             },
@@ -97,6 +105,26 @@ impl IsoClock {
         }
         Ok(ts.as_second() as f64 + f64::from(ts.subsec_nanosecond()) * 1e-9)
     }
+}
+
+/// `DD.MM.YYYY hh:mm[:ss[.fraction]]` (day and month of one or two digits, a space or `T`, an
+/// hour of one or two) as ISO-8601 (`YYYY-MM-DDThh:mm...`); `None` for any other cell.
+fn day_first(c: &str) -> Option<String> {
+    let (date, time) = c.split_once([' ', 'T'])?;
+    let mut d = date.split('.');
+    let (day, month, year) = (d.next()?, d.next()?, d.next()?);
+    let digits = |s: &str, lo: usize, hi: usize| {
+        (lo..=hi).contains(&s.len()) && s.bytes().all(|b| b.is_ascii_digit())
+    };
+    if d.next().is_some() || !digits(day, 1, 2) || !digits(month, 1, 2) || !digits(year, 4, 4) {
+        return None;
+    }
+    let time = time.trim_start();
+    let (hour, rest) = time.split_once(':')?;
+    if !digits(hour, 1, 2) {
+        return None;
+    }
+    Some(format!("{year}-{month:0>2}-{day:0>2}T{hour:0>2}:{rest}"))
 }
 
 /// The median step of a time axis (s), the upper middle of the steps for an even count; `None`
@@ -140,8 +168,25 @@ mod tests {
         assert!(c.seconds("").unwrap().is_nan());
         let e = c.seconds("2025-03-04T08:00:30+01:00").unwrap_err();
         assert!(e.contains("has a UTC offset"), "{e}");
-        let e = c.seconds("04.03.2025 08:00").unwrap_err();
-        assert!(e.contains("not an ISO-8601"), "{e}");
+        // day first with dots, as a German logger writes: the same instants
+        assert_eq!(c.seconds("04.03.2025 08:00").unwrap(), 1_741_075_200.0);
+        assert_eq!(c.seconds("4.3.2025 8:00:15").unwrap(), 1_741_075_215.0);
+        assert_eq!(c.seconds("04.03.2025T08:00:15.5").unwrap(), 1_741_075_215.5);
+        for bad in [
+            "04/03/2025 08:00",
+            "32.03.2025 08:00",
+            "04.03.25 08:00",
+            "04.03.2025",
+        ] {
+            let e = c.seconds(bad).unwrap_err();
+            assert!(e.contains("not an ISO-8601"), "{e}");
+        }
+        assert!(c
+            .seconds("04/03/2025 08:00")
+            .unwrap_err()
+            .contains("slashes"));
+        let e = c.seconds("32.03.2025 08:00").unwrap_err();
+        assert!(e.starts_with("\"32.03.2025 08:00\""), "{e}");
         let e = c.seconds("1741075200").unwrap_err();
         assert!(e.contains("time_s"), "{e}");
     }
