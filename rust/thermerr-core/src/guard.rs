@@ -653,8 +653,8 @@ pub const JUMP_FACTOR: f64 = 20.0;
 /// (15 s, 16 temperatures, 5 probes) the largest step of any column is 2.9 K (a fast sensor
 /// whose 99th percentile is 0.52 K: 5.5 times it), of any probe 0.79 µm.
 pub const JUMP_FLOOR: f64 = 2.0;
-/// A column steps where two runs were joined ([`one_run`]) when it moves by this many units
-/// (K, µm) or more between two readings (above a 0.1-K logger's tick; on the real 46-h run
+/// A temperature steps where two runs were joined ([`one_run`]) when it moves by this many
+/// kelvin or more between two readings (above a 0.1-K logger's tick; on the real 46-h run
 /// joined to itself the smallest step back at the join is T_t11's 0.36 K) ...
 pub const JOIN_FLOOR: f64 = 0.2;
 /// ... and that step is either this many times both steps beside it (a jump out of the column's
@@ -806,14 +806,15 @@ pub const ONE_RUN: &str = "a second run appended to the first? A run is one stre
 /// Refuses a run in which at least half of `cols` (three or more) step at the same row
 /// ([`JOIN_FLOOR`], [`JOIN_ALONE`], [`JOIN_FACTOR`], [`JOIN_AFTER`]), other than after a gap in
 /// the log (which is said as one): one sensor's fault moves one column (a logger module's, the
-/// few on it), and heat moves a temperature over several readings; most temperatures and probes
-/// stepping at once between two readings and staying there is the machine's state changing
+/// few on it), and heat moves a temperature over several readings; most temperatures stepping
+/// at once between two readings and staying there is the machine's state changing
 /// under the log: two runs joined into one file with its clock running on, or the log resumed
 /// after the machine was reset. Taken as sensor faults, those columns would fail from there on
 /// and nothing after it would be fitted or scored; simulated through, the network would be
 /// asked to jump. A join where the machine is back about where the first run started (cooled
 /// over a night) is no such step, and the network runs through it as through one run. One line
-/// naming the file, the row and the columns.
+/// naming the file, the row and the columns. `cols` are temperatures: a probe measured now and
+/// then and held between (a touch probe's cycle) steps at each measurement, all probes at once.
 pub fn one_run(source: &str, names: &[&str], cols: &[&[f64]], time: &[f64]) -> Result<()> {
     let n = time.len();
     if n < 3 || cols.len() < 3 {
@@ -847,14 +848,14 @@ pub fn one_run(source: &str, names: &[&str], cols: &[&[f64]], time: &[f64]) -> R
     let Some((&row, which)) = at.iter().find(|(_, w)| w.len() >= need) else {
         return Ok(());
     };
-    let show: Vec<String> = which
+    // the largest steps first
+    let step = |c: usize| cols[c][row] - cols[c][row - 1];
+    let mut largest = which.clone();
+    largest.sort_by(|&a, &b| step(b).abs().total_cmp(&step(a).abs()));
+    let show: Vec<String> = largest
         .iter()
         .take(4)
-        .map(|&c| {
-            let (name, col) = (names[c], cols[c]);
-            let unit = if name.starts_with("E_") { "µm" } else { "K" };
-            format!("{name} by {:.3} {unit}", col[row] - col[row - 1])
-        })
+        .map(|&c| format!("{} by {:.3} K", names[c], step(c)))
         .collect();
     Err(Error::Parse {
         file: source.to_string(),
@@ -862,7 +863,7 @@ pub fn one_run(source: &str, names: &[&str], cols: &[&[f64]], time: &[f64]) -> R
         row: Some(row as u64 + 1),
         column: None,
         reason: format!(
-            "{} of the {} temperature and probe columns step at once, each far faster than it moves otherwise ({}{}), where a sensor's fault moves its own column: the machine's state changed between two readings, {ONE_RUN}",
+            "{} of the {} temperature columns step at once, each far faster than it moves otherwise ({}{}), where a sensor's fault moves its own column: the machine's state changed between two readings, {ONE_RUN}",
             which.len(),
             cols.len(),
             show.join(", "),

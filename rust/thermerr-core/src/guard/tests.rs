@@ -670,13 +670,13 @@ fn every_column_stepping_at_one_row_is_a_second_run_joined_but_two_are_faults() 
                 .collect()
         })
         .collect();
-    let names = ["E_x", "T_a", "T_b", "T_c", "T_d", "T_e"];
+    let names = ["T_a", "T_b", "T_c", "T_d", "T_e", "T_f"];
     let cols: Vec<&[f64]> = joined.iter().map(Vec::as_slice).collect();
     let e = one_run("run.csv", &names, &cols, &t)
         .unwrap_err()
         .to_string();
     assert!(
-        e.starts_with("run.csv, row 481: 6 of the 6 temperature and probe columns step at once, each far faster than it moves otherwise (E_x by -"),
+        e.starts_with("run.csv, row 481: 6 of the 6 temperature columns step at once, each far faster than it moves otherwise (T_f by -"),
         "{e}"
     );
     assert!(e.contains("a second run appended to the first?"), "{e}");

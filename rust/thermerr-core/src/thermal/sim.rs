@@ -61,14 +61,14 @@ impl<'a> RunView<'a> {
     }
 
     /// Refuses a file that holds two runs joined, its clock running on
-    /// ([`crate::guard::one_run`] on every `T_*` and `E_*` column): what a network is fitted or
+    /// ([`crate::guard::one_run`] on every `T_*` column): what a network is fitted or
     /// diagnosed on is one run.
     pub fn one_run(&self) -> Result<()> {
         let mut names: Vec<&str> = self
             .cols
             .keys()
             .copied()
-            .filter(|c| c.starts_with("T_") || c.starts_with("E_"))
+            .filter(|c| c.starts_with("T_"))
             .collect();
         names.sort_unstable();
         let cols: Vec<&[f64]> = names.iter().map(|c| self.cols[c]).collect();
