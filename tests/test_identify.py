@@ -560,7 +560,8 @@ def test_two_runs_joined_in_one_file_are_refused_naming_the_row(tmp_path, capsys
     one row. Taken as sensor faults, every probe failed from there on and `init` wrote a file with
     no held-out figure on any axis (exit 0; the real run joined to itself), and the diagnosis
     said "mend the probes". One line naming the file and the row instead, nothing written, from
-    the command line, `Machine.identify`, `diagnose` and `Machine.calibrate` alike."""
+    the command line, `Machine.identify`, `diagnose`, `Machine.calibrate`, `Machine.simulate`
+    and `thermerr predict` alike."""
     c = syn.make_case("lathe", "none", 1, hours=(3.0, 1.0), dt=DT_S)
     n = len(c.train["time_s"])
     run = tmp_path / "joined.csv"
@@ -582,6 +583,12 @@ def test_two_runs_joined_in_one_file_are_refused_naming_the_row(tmp_path, capsys
         diagnose(_run(c.train, "train.csv"), nominal, joined)
     with pytest.raises(DataError, match=rf"joined\.csv, row {n + 1}: "):
         nominal.calibrate(joined)
+    with pytest.raises(DataError, match=rf"joined\.csv, row {n + 1}: "):
+        nominal.simulate(joined)
+    (tmp_path / "nominal.toml").write_text(c.nominal_toml())
+    pred = tmp_path / "pred.csv"
+    assert main(["predict", str(run), "--machine", str(tmp_path / "nominal.toml"), "--out", str(pred)]) == 2
+    assert "step at once" in capsys.readouterr().err and not pred.exists()
     # the run alone is one run; the clock starting again is the reader's refusal, saying why
     Machine.identify(_run(c.train, "train.csv"))
     syn.write_run_csv(run, _joined(c.train, restart_clock=True))

@@ -139,6 +139,7 @@ impl PyMachine {
             let view = RunView::new(&run);
             self.inner
                 .check_columns(&self.file, &run.source, |c| view.has(c))?;
+            view.one_run()?;
             let init = if let Some(named) = &initial_k {
                 if fit_initial > 0 {
                     return Err(thermerr_core::Error::InvalidParam {
