@@ -181,3 +181,34 @@ def test_edge_reference_bad_input_is_one_line_exit_2(example_run1, edge_bin, tmp
         assert res.stdout == ""
     with pytest.raises(tr.ThermerrError, match="absolute readings"):
         tr.load_model(absolute).predict_run(run, reference=run)
+
+
+def test_a_second_run_on_a_clock_that_ran_on_is_its_own_run(tmp_path, capsys):
+    """A run whose clock goes on from the training run's last sample but whose machine does not
+    (a cold start logged on a clock that ran on: most temperatures step at its first row) is not
+    a continuation: joined, the diagnosis refused it as two runs in one; now it is held out as a
+    run of its own, and the command line says why. A piece cut from the same log still
+    continues."""
+    from thermerr_rs import synthetic as syn
+
+    c = syn.make_case("lathe", "none", 1, hours=(8.0, 4.0), dt=120.0)
+    run = tr.Run.from_frame(c.train, source="a.csv")
+    n, k = len(run), len(run) * 2 // 3
+    head, tail = run.slice(0, k), run.slice(k, n)
+    assert tail.continues(head) and tail.seam(head) is None
+    t = np.asarray(c.train["time_s"])
+    later = {key: (t[:60] + t[-1] + (t[1] - t[0])) if key == "time_s" else np.asarray(v)[:60]
+             for key, v in c.train.items()}
+    second = tr.Run.from_frame(later, source="b.csv")
+    assert not second.continues(run)
+    why = second.seam(run)
+    assert why is not None and f"row {n + 1}: " in why and "temperature columns step at once" in why
+    (tmp_path / "m.toml").write_text(c.nominal_toml())
+    _write(run, tmp_path / "a.csv")
+    _write(second, tmp_path / "b.csv")
+    assert main(["diagnose", str(tmp_path / "a.csv"), "--holdout", str(tmp_path / "b.csv"), "--machine",
+                 str(tmp_path / "m.toml"), "--out", str(tmp_path / "d")]) == 0
+    out = capsys.readouterr().out
+    assert "b.csv's clock goes on from " in out and "a.csv's last sample, but the machine does not" in out, out
+    assert "held out as a run of its own" in out and "continues" not in out
+    assert json.loads((tmp_path / "d" / "report.json").read_text())["holdout"].startswith("the separate run ")

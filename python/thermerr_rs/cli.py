@@ -612,6 +612,10 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     machine = Machine.load(args.machine)
     run = _read(args, args.run)
     hold = _read(args, args.holdout) if args.holdout else None
+    seam = hold.seam(run) if hold is not None else None
+    if hold is not None and seam is not None:
+        _say(args, f"note: {hold.source}'s clock goes on from {run.source}'s last sample, but the machine does not "
+                   f"({seam}): held out as a run of its own, simulated from its first readings")
     if hold is not None and hold.continues(run):
         _say(args, f"{hold.source} continues {run.source} (its clock starts {hold.time_s[0] - run.time_s[-1]:g} s after "
                    f"{run.source}'s last sample): held out as the tail of one run, the model running on from "

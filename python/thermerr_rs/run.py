@@ -220,9 +220,27 @@ class Run:
         """Whether this run is the continuation of ``before``, cut from the same log: its clock
         starts after ``before``'s last sample by at most :data:`CONTINUATION_STEPS` of
         ``before``'s sampling steps (a run cut out of a ``time_s`` log keeps its clock; one with
-        an ISO ``time`` column counts from its own first row and is never taken as one)."""
+        an ISO ``time`` column counts from its own first row and is never taken as one), and the
+        machine goes on through the seam (:meth:`seam` is None)."""
+        return self._clock_continues(before) and self.seam(before) is None
+
+    def _clock_continues(self, before: Run) -> bool:
         gap = float(self.time_s[0] - before.time_s[-1])
         return 0.0 < gap <= CONTINUATION_STEPS * median_step(before.time_s)
+
+    def seam(self, before: Run) -> str | None:
+        """Why this run, whose clock goes on from ``before``'s, is another run all the same: most
+        of its temperatures step away from ``before``'s last readings at its first row (a run
+        started later on a logger whose clock ran on), in one line naming the row; None when
+        the clock does not go on or the machine does."""
+        if not self._clock_continues(before):
+            return None
+        joined = self.following(before)
+        try:
+            _core.one_run(joined.source, joined.time_s, list(joined.names), joined.matrix(list(joined.names)))
+        except DataError as e:
+            return str(e)
+        return None
 
     def following(self, before: Run) -> Run:
         """``before``'s rows, then this run's: one run, as a logger running through both would

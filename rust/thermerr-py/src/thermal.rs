@@ -525,6 +525,22 @@ fn diagnosis_dict<'py>(
     Ok(out)
 }
 
+/// Refuses a run that holds two runs joined (`guard::one_run` on its `T_*` columns): one line
+/// naming the source and the row, a `DataError`.
+#[pyfunction]
+fn one_run(
+    py: Python<'_>,
+    source: &str,
+    time: PyReadonlyArray1<'_, f64>,
+    names: Vec<String>,
+    data: PyReadonlyArray2<'_, f64>,
+) -> PyResult<()> {
+    let run = core_run(source, &time, names, &data)?;
+    crate::detach(py, || RunView::new(&run).one_run())?;
+    Ok(())
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(one_run, m)?)?;
     m.add_class::<PyMachine>()
 }
