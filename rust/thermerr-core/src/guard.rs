@@ -800,7 +800,7 @@ fn failing_of(col: &[f64], time: &[f64], jumps: &[usize]) -> Vec<std::ops::Range
 }
 
 /// What a run is, for a file that holds more than one: said when the time goes back to the first row's
-/// (the run reader) and when most columns jump at one row ([`one_run`]).
+/// (the run reader) and when most temperatures step at one row ([`one_run`]).
 pub const ONE_RUN: &str = "a second run appended to the first? A run is one stretch of the machine's time, simulated from its first readings: give each run as a file of its own (the diagnosis takes a second as --holdout)";
 
 /// Refuses a run in which at least half of `cols` (three or more) step at the same row
