@@ -915,7 +915,7 @@ mod tests {
             ([0.0, 15.0].as_slice(), ["time".to_string()].as_slice())
         );
         let e = err(
-            b"time,T_a\n2025-03-04T08:00:00,20\n04.03.2025 08:00:15,21\n",
+            b"time,T_a\n2025-03-04T08:00:00,20\n03/04/2025 08:00:15,21\n",
             NanPolicy::Error,
         );
         assert!(
