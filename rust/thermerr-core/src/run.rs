@@ -250,11 +250,7 @@ impl Run {
                     line: Some(line),
                     row: Some(row),
                     column: Some(names[j].clone()),
-                    reason: if dialect.decimal == b',' {
-                        not_a_number_comma(cell)
-                    } else {
-                        not_a_number(&names[j], cell)
-                    },
+                    reason: not_a_number_as(&names[j], cell, dialect.decimal),
                 })?;
                 cells[j].push(v);
             }
@@ -563,16 +559,17 @@ pub fn not_a_number(column: &str, cell: &str) -> String {
     }
 }
 
-/// The refusal of a cell that is not a number in a file read with a decimal comma.
-fn not_a_number_comma(cell: &str) -> String {
-    if cell.contains('.') {
+/// [`not_a_number`] in a file whose decimal mark is `decimal`: with a comma, a point in the cell
+/// is named as what it is.
+fn not_a_number_as(column: &str, cell: &str, decimal: u8) -> String {
+    if decimal == b',' && cell.contains('.') {
         format!(
             "{cell:?} is not a number with a decimal comma (a point in it: the file writes \
              decimal points, or thousands separators; read it without --decimal , or write the \
              number without them)"
         )
     } else {
-        format!("{cell:?} is not a number")
+        not_a_number(column, cell)
     }
 }
 
