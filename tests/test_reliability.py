@@ -339,12 +339,15 @@ def test_a_decimal_comma_file_reads_with_decimal_and_says_how_without(example_ru
     r = _cli("select-sensors", str(de), "--axis", "E_z", "--json", "--delimiter", ";")
     assert r.returncode == 2 and 'de.csv, line 2, row 1, column `time_s`: "0,0" is not a number' in r.stderr, r.stderr
     assert "is not a number (a decimal comma? read the file with --decimal ," in r.stderr, r.stderr
-    r = _cli("select-sensors", str(de), "--axis", "E_z", "--json", "--delimiter", ";", "--decimal", ",")
+    r = _cli("select-sensors", str(de), "--axis", "E_z", "--json", "--delimiter", "semicolon", "--decimal", ",")
     assert r.returncode == 0, r.stderr
     same = _cli("select-sensors", str(example_run1), "--axis", "E_z", "--json")
     assert json.loads(r.stdout) == json.loads(same.stdout)
     a, b = tr.read_run(de, delimiter=";", decimal=","), tr.read_run(example_run1)
     assert a.names == b.names and np.array_equal(a.time_s, b.time_s)
     assert np.array_equal(a.matrix(a.names), b.matrix(b.names))
+    # the delimiter by name (the core's names, as on the command line and the edge)
+    c = tr.read_run(de, delimiter="semicolon", decimal=",")
+    assert np.array_equal(c.matrix(c.names), b.matrix(b.names))
     with pytest.raises(tr.ThermerrError, match="decimal comma needs another field delimiter"):
         tr.read_run(de, decimal=",")

@@ -29,7 +29,7 @@ import warnings
 from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
-from . import __version__
+from . import __version__, _core
 from .errors import ConvergenceError, NumericalError, SuspectReadingWarning, ThermerrError
 from .metrics import Scores, scores
 from .run import Run, read_run
@@ -85,8 +85,8 @@ def _read(args: argparse.Namespace, path: str) -> Run:
 
 
 def _delimiter(text: str) -> str:
-    named = {"tab": "\t", "\\t": "\t", "comma": ",", "semicolon": ";"}
-    return named.get(text, text)
+    """A delimiter as written on the command line (``tab``, ``semicolon``, ...): the core's names."""
+    return _core.delimiter_named(text)
 
 
 def _int_at_least(lo: int) -> Any:

@@ -281,7 +281,8 @@ def read_run(path: str | os.PathLike[str], nan: NanPolicy = "error", *, delimite
     ``"drop"`` drops rows with any missing value; ``"interpolate"`` fills gaps linearly in time.
     Every refusal names the file, and the row and column where there is one. Columns without a
     ``T_``/``E_``/``U_`` prefix are ignored with a warning. ``delimiter``: the field separator
-    (``";"`` for files from a spreadsheet set to a decimal comma's locale, ``"\t"``, ...); a
+    (``";"`` for files from a spreadsheet set to a decimal comma's locale, ``"\t"``, ...; or
+    by name: ``"tab"``, ``"semicolon"``, ``"comma"``); a
     header that looks separated by another one says so. ``decimal``: the decimal mark, ``"."``
     (default) or ``","`` (``20,5`` for 20.5, as such a spreadsheet writes; then a point in a
     number is refused, not read as a thousands separator).

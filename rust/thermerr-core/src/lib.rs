@@ -9,6 +9,7 @@
 //! per model kind.
 
 pub mod artifact;
+pub mod dialect;
 pub mod error;
 #[cfg(feature = "fit")]
 pub mod fcm;

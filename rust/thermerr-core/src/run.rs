@@ -4,6 +4,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+pub use crate::dialect::{not_a_number, Dialect};
 use crate::error::{Error, Result};
 use crate::timeaxis::{time_column, IsoClock, TimeKind, TIME_ISO, TIME_S};
 
@@ -32,60 +33,6 @@ impl std::str::FromStr for NanPolicy {
                 format!("must be \"error\", \"drop\" or \"interpolate\", got {other:?}"),
             )),
         }
-    }
-}
-
-/// How a run's CSV is written: its field delimiter and its decimal mark. A spreadsheet saved in a
-/// German or French locale writes `20,5` for 20.5 and separates fields by `;`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Dialect {
-    pub delimiter: u8,
-    /// `b'.'` or `b','`.
-    pub decimal: u8,
-}
-
-impl Default for Dialect {
-    fn default() -> Self {
-        Dialect {
-            delimiter: b',',
-            decimal: b'.',
-        }
-    }
-}
-
-impl Dialect {
-    /// The dialect named by a delimiter (one ASCII character, not a quote or a line end) and a
-    /// decimal mark (`.` or `,`, not the delimiter): the one check behind every reader's
-    /// options.
-    pub fn new(delimiter: &str, decimal: &str) -> Result<Dialect> {
-        let delimiter = match delimiter.as_bytes() {
-            [b] if b.is_ascii() && !matches!(b, b'"' | b'\n' | b'\r') => *b,
-            _ => {
-                return Err(Error::param(
-                    "delimiter",
-                    format!(
-                        "must be one ASCII character (not a quote or newline), got {delimiter:?}"
-                    ),
-                ))
-            }
-        };
-        let decimal = match decimal {
-            "." => b'.',
-            "," => b',',
-            _ => {
-                return Err(Error::param(
-                    "decimal",
-                    format!("must be \".\" or \",\", got {decimal:?}"),
-                ))
-            }
-        };
-        if decimal == delimiter {
-            return Err(Error::param(
-                "decimal",
-                "a decimal comma needs another field delimiter (\";\" as a spreadsheet in that locale writes, or tab)",
-            ));
-        }
-        Ok(Dialect { delimiter, decimal })
     }
 }
 
@@ -164,24 +111,16 @@ impl Run {
             .map_err(|e| csv_error(&file, bytes, e))?
             .clone();
         let names: Vec<String> = header.iter().map(str::to_string).collect();
-        if let [only] = names.as_slice() {
+        let named: Vec<&str> = names.iter().map(String::as_str).collect();
+        if let Some(reason) = dialect.one_column_header(&named) {
             // one column whose name holds another delimiter: say so before "no time_s column"
-            if let Some(d) = [b',', b';', b'\t', b'|']
-                .into_iter()
-                .find(|&d| d != delimiter && only.as_bytes().contains(&d))
-            {
-                return Err(Error::Parse {
-                    file,
-                    line: Some(1),
-                    row: None,
-                    column: None,
-                    reason: format!(
-                        "the header is one column, {only:?}: are the fields separated by {:?}? \
-                         (delimiter: {:?})",
-                        d as char, delimiter as char
-                    ),
-                });
-            }
+            return Err(Error::Parse {
+                file,
+                line: Some(1),
+                row: None,
+                column: None,
+                reason,
+            });
         }
         let time = time_column(&names);
         let parsed: Vec<bool> = names
@@ -245,12 +184,12 @@ impl Run {
                     cells[j].push(v);
                     continue;
                 }
-                let v = parse_with(cell, dialect.decimal).ok_or_else(|| Error::Parse {
+                let v = dialect.number(cell).ok_or_else(|| Error::Parse {
                     file: file.clone(),
                     line: Some(line),
                     row: Some(row),
                     column: Some(names[j].clone()),
-                    reason: not_a_number_as(&names[j], cell, dialect.decimal),
+                    reason: dialect.not_a_number(&names[j], cell),
                 })?;
                 cells[j].push(v);
             }
@@ -534,67 +473,6 @@ pub fn is_data_column(name: &str) -> bool {
     PREFIXES
         .iter()
         .any(|p| name.starts_with(p) && name.len() > p.len())
-}
-
-/// The refusal of a cell of `column` that is not a number, with the likely fix: for a decimal
-/// comma (a spreadsheet saved in a German or French locale writes `20,5` for 20.5), and for a
-/// logger's date-times in `time_s` (the column to name `time`). The CSV reader's and
-/// `Run.from_frame`'s words.
-pub fn not_a_number(column: &str, cell: &str) -> String {
-    if column == "time_s" && IsoClock::new().seconds(cell).is_ok() {
-        return format!(
-            "{cell:?} is not a number of seconds (a date-time: name the column `time` and it is \
-             read as ISO-8601, the run's clock starting at its first row)"
-        );
-    }
-    let dotted = cell.trim().replacen(',', ".", 1);
-    match parse_cell(&dotted) {
-        Some(_) if cell.matches(',').count() == 1 => {
-            format!(
-                "{cell:?} is not a number (a decimal comma? read the file with --decimal , \
-                 (decimal=\",\" in Python), or write {dotted})"
-            )
-        }
-        _ => format!("{cell:?} is not a number"),
-    }
-}
-
-/// [`not_a_number`] in a file whose decimal mark is `decimal`: with a comma, a point in the cell
-/// is named as what it is.
-fn not_a_number_as(column: &str, cell: &str, decimal: u8) -> String {
-    if decimal == b',' && cell.contains('.') {
-        format!(
-            "{cell:?} is not a number with a decimal comma (a point in it: the file writes \
-             decimal points, or thousands separators; read it without --decimal , or write the \
-             number without them)"
-        )
-    } else {
-        not_a_number(column, cell)
-    }
-}
-
-/// A cell's number under the decimal mark `decimal` (`b'.'` or `b','`): with a comma, one comma
-/// is the decimal mark and a point is refused (a thousands separator, or a file that writes
-/// points after all: neither read as the other).
-fn parse_with(cell: &str, decimal: u8) -> Option<f64> {
-    if decimal != b',' {
-        return parse_cell(cell);
-    }
-    if cell.contains('.') {
-        return None;
-    }
-    match cell.matches(',').count() {
-        0 => parse_cell(cell),
-        1 => parse_cell(&cell.replacen(',', ".", 1)),
-        _ => None,
-    }
-}
-
-fn parse_cell(cell: &str) -> Option<f64> {
-    if cell.is_empty() || cell.eq_ignore_ascii_case("nan") {
-        return Some(f64::NAN);
-    }
-    cell.parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
 /// Lines of a text up to a byte offset, counted incrementally for offsets that only grow.

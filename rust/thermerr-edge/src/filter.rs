@@ -1,7 +1,10 @@
 //! The streaming command-line filter's line parser: a CSV header picks the model's feature
 //! columns by name, then each data line becomes one sample. The CLI (`main.rs`) and the fuzz
-//! target `edge_stream` run lines through this one code path.
+//! target `edge_stream` run lines through this one code path. Fields are split at the
+//! [`Dialect`]'s delimiter and numbers read under its decimal mark, by the core's rules (the
+//! library's CSV reader reads the same file the same way); fields are not quoted.
 
+use thermerr_core::dialect::Dialect;
 use thermerr_core::guard::GuardedPredictor;
 use thermerr_core::timeaxis::{time_column, IsoClock, TimeKind, TIME_S};
 
@@ -18,6 +21,7 @@ pub struct LineFilter {
     /// the time column and how it is written (`time_s` seconds, or `time` ISO-8601 date-times)
     time: Option<(usize, TimeKind)>,
     clock: IsoClock,
+    dialect: Dialect,
     width: usize,
     x: Vec<f64>,
     row: usize,
@@ -43,14 +47,23 @@ pub enum Guarded<'l> {
 }
 
 impl LineFilter {
-    /// Reads the header line: every feature the model reads must be a column of it.
+    /// Reads the header line of a CSV with `,` between fields and decimal points: every feature
+    /// the model reads must be a column of it.
     pub fn new(header: &str, p: &Predictor) -> Result<Self, String> {
+        LineFilter::with_dialect(header, p, Dialect::default())
+    }
+
+    /// [`LineFilter::new`] for lines written in `dialect` (another delimiter, a decimal comma).
+    pub fn with_dialect(header: &str, p: &Predictor, dialect: Dialect) -> Result<Self, String> {
         let names: Vec<&str> = header
             .trim_start_matches('\u{feff}')
             .trim_end_matches(['\r', '\n'])
-            .split(',')
+            .split(dialect.delimiter as char)
             .map(str::trim)
             .collect();
+        if let Some(e) = dialect.one_column_header(&names) {
+            return Err(e);
+        }
         let wanted = p
             .features()
             .ok_or("the model does not record its feature columns (fit it on a run)")?;
@@ -74,6 +87,7 @@ impl LineFilter {
             names: wanted.to_vec(),
             time: time_column(&names),
             clock: IsoClock::new(),
+            dialect,
             width: names.len(),
             x: vec![0.0; p.n_inputs()],
             row: 0,
@@ -93,14 +107,15 @@ impl LineFilter {
     }
 
     /// As [`LineFilter::parse_row`]; with `missing_ok` a feature field that is not a finite
-    /// number reads as NaN (a sensor fault for the guard) instead of rejecting the line. The
-    /// time field, when there is one, must be a finite number either way.
+    /// number reads as NaN (a sensor fault for the guard) instead of rejecting the line, unless
+    /// it is a number in the other decimal mark (the stream read with the wrong `--decimal`).
+    /// The time field, when there is one, must be a finite number either way.
     fn parse_fields<'l>(
         &mut self,
         line: &'l str,
         missing_ok: bool,
     ) -> Result<(&[f64], Option<Stamp<'l>>), String> {
-        let f: Vec<&str> = line.split(',').collect();
+        let f: Vec<&str> = line.split(self.dialect.delimiter as char).collect();
         if f.len() != self.width {
             return Err(format!("expected {} fields, got {}", self.width, f.len()));
         }
@@ -108,9 +123,13 @@ impl LineFilter {
             None => None,
             Some((k, TimeKind::Seconds)) => {
                 let t = f[k].trim();
-                match t.parse::<f64>() {
-                    Ok(v) if v.is_finite() => Some((t, v)),
-                    _ => return Err(format!("column `time_s`: not a finite number ({t:?})")),
+                match self.dialect.number(t) {
+                    Some(v) if v.is_finite() => Some((t, v)),
+                    Some(_) => return Err("column `time_s`: time is missing".into()),
+                    None => {
+                        let why = self.dialect.not_a_number(TIME_S, t);
+                        return Err(format!("column `time_s`: {why}"));
+                    }
                 }
             }
             Some((k, TimeKind::Iso)) => {
@@ -124,10 +143,15 @@ impl LineFilter {
         };
         for ((xv, &k), name) in self.x.iter_mut().zip(&self.features).zip(&self.names) {
             let raw = f[k].trim();
-            match raw.parse::<f64>() {
-                Ok(v) if v.is_finite() => *xv = v,
-                _ if missing_ok => *xv = f64::NAN,
-                _ => return Err(format!("column `{name}`: not a finite number ({raw:?})")),
+            match self.dialect.number(raw) {
+                Some(v) if v.is_finite() => *xv = v,
+                // a cell in the other decimal mark is the file read the wrong way, not a fault
+                _ if missing_ok && !self.dialect.other_mark(raw) => *xv = f64::NAN,
+                Some(_) => return Err(format!("column `{name}`: missing value ({raw:?})")),
+                None => {
+                    let why = self.dialect.not_a_number(name, raw);
+                    return Err(format!("column `{name}`: {why}"));
+                }
             }
         }
         Ok((&self.x, time))

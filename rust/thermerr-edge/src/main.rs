@@ -21,16 +21,24 @@
 //! the error is relative to: the training run's start, or the readings when the probes were
 //! zeroed) instead of the stream's own first row: for a gateway started, or restarted, in the
 //! middle of a run on a warm machine.
+//!
+//! `--delimiter D` and `--decimal M` read a run written another way, as the library's readers
+//! do (`thermerr_core::dialect`): `--delimiter ';' --decimal ,` for a spreadsheet or logger in
+//! a German or French locale (`20,5`), `--delimiter tab`. `--reference` is read the same way.
+//! The output is always `,` between fields and decimal points (a time written with a decimal
+//! comma is written as its number).
 
 use std::io::{BufRead, BufReader, Write};
 use std::process::ExitCode;
 
+use thermerr_core::dialect::Dialect;
 use thermerr_core::shape::{Shaper, Shaping};
 use thermerr_edge::filter::{Guarded, LineFilter};
 use thermerr_edge::Predictor;
 
 const USAGE: &str =
     "usage: thermerr-edge MODEL.json [RUN.csv] [--shape SPEC] [--no-guard] [--bench-latency N]
+                     [--reference RUN.csv] [--delimiter D] [--decimal M]
   Reads CSV rows (header first) from RUN.csv or stdin, writes time_s,<target>_pred per row.
   A model fitted with a sensor-fault guard adds a status column (ok, held:T_x, fallback:T_x,
   frozen:T_x, joined by ;): missing, out-of-range, too fast or stuck readings are held, then
@@ -38,7 +46,9 @@ const USAGE: &str =
   --shape limit=50,rate=2,deadband=0.5,unit=0.1,bits=16 adds <target>_offset, the prediction
   clamped (um), held within a dead band (um), rate-limited (um/s) and quantised (um, register bits).
   --reference RUN.csv takes the rises from RUN.csv's first data row (e.g. the training run's start,
-  where the error is zero) instead of the stream's first row: a gateway started mid-run.";
+  where the error is zero) instead of the stream's first row: a gateway started mid-run.
+  --delimiter ';' (or tab, comma, semicolon) and --decimal , read a run written with that field
+  separator and decimal mark (20,5); the output is always , and decimal points.";
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
     eprintln!("thermerr-edge: error: {msg}");
@@ -47,7 +57,7 @@ fn fail(msg: impl std::fmt::Display) -> ExitCode {
 
 /// The model's readings in the first data row of the run file at `path`, picked by name as the
 /// stream's are: the rise reference of `--reference`.
-fn reference_row(path: &str, p: &Predictor) -> Result<Vec<f64>, String> {
+fn reference_row(path: &str, p: &Predictor, dialect: Dialect) -> Result<Vec<f64>, String> {
     let f = std::fs::File::open(path).map_err(|e| format!("--reference {path}: {e}"))?;
     let mut lines = BufReader::new(f).lines();
     let header = match lines.next() {
@@ -55,7 +65,8 @@ fn reference_row(path: &str, p: &Predictor) -> Result<Vec<f64>, String> {
         Some(Err(e)) => return Err(format!("--reference {path}: {e}")),
         None => return Err(format!("--reference {path}: the file is empty")),
     };
-    let mut filter = LineFilter::new(&header, p).map_err(|e| format!("--reference {path}: {e}"))?;
+    let mut filter = LineFilter::with_dialect(&header, p, dialect)
+        .map_err(|e| format!("--reference {path}: {e}"))?;
     match lines.next() {
         Some(Ok(line)) => filter
             .parse_row(line.trim_end_matches('\r'))
@@ -73,6 +84,7 @@ fn run(
     mut shaper: Option<Shaper>,
     use_guard: bool,
     reference: Option<Vec<f64>>,
+    dialect: Dialect,
 ) -> ExitCode {
     if let Some(x) = &reference {
         if let Err(e) = p.set_reference(x) {
@@ -85,7 +97,7 @@ fn run(
         Some(Err(e)) => return fail(format!("cannot read the header: {e}")),
         None => return fail("the input is empty (a header row is expected)"),
     };
-    let mut filter = match LineFilter::new(&header, p) {
+    let mut filter = match LineFilter::with_dialect(&header, p, dialect) {
         Ok(f) => f,
         Err(e) => return fail(e),
     };
@@ -164,9 +176,11 @@ fn run(
             }
         };
         let ok = (|| -> std::io::Result<()> {
-            match o.time {
-                Some(t) => write!(out, "{t},{}", o.y)?,
-                None => write!(out, "{},{}", o.row, o.y)?,
+            match (o.time, o.t_s) {
+                // a time written with a decimal comma would split the output's field
+                (Some(t), Some(s)) if t.contains(',') => write!(out, "{s},{}", o.y)?,
+                (Some(t), _) => write!(out, "{t},{}", o.y)?,
+                (None, _) => write!(out, "{},{}", o.row, o.y)?,
             }
             if let Some(s) = shaper.as_mut() {
                 // the rate limit is per second of the input's time; without one, per row of
@@ -254,6 +268,25 @@ fn main() -> ExitCode {
         }
         args.drain(k..k + 2);
     }
+    let mut dialect_args = [",".to_string(), ".".to_string()];
+    for (flag, slot) in ["--delimiter", "--decimal"].into_iter().zip(0..) {
+        if let Some(k) = args.iter().position(|a| a == flag) {
+            match args.get(k + 1) {
+                Some(v) => dialect_args[slot] = v.clone(),
+                None => {
+                    return fail(format!(
+                        "{flag} takes a value, e.g. {flag} {}",
+                        [";", ","][slot]
+                    ))
+                }
+            }
+            args.drain(k..k + 2);
+        }
+    }
+    let dialect = match Dialect::new(&dialect_args[0], &dialect_args[1]) {
+        Ok(d) => d,
+        Err(e) => return fail(e),
+    };
     let use_guard = match args.iter().position(|a| a == "--no-guard") {
         Some(k) => {
             args.remove(k);
@@ -282,11 +315,11 @@ fn main() -> ExitCode {
     };
     let reference = match reference_path
         .as_deref()
-        .map(|path| reference_row(path, &p))
+        .map(|path| reference_row(path, &p, dialect))
     {
         None => None,
         Some(Ok(x)) => Some(x),
         Some(Err(e)) => return fail(e),
     };
-    run(&mut p, input, bench, shaper, use_guard, reference)
+    run(&mut p, input, bench, shaper, use_guard, reference, dialect)
 }

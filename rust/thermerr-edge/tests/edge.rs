@@ -187,6 +187,77 @@ fn binary_streams_predictions_and_skips_bad_rows() {
     let _ = std::fs::remove_file(&path);
 }
 
+/// A run written by a spreadsheet in a German locale (`;` between fields, `20,5`) read with
+/// `--delimiter ';' --decimal ,` gives the dotted run's output to the byte (times with a decimal
+/// comma written as their numbers); read without `--decimal ,`, each line is refused saying so.
+#[test]
+fn binary_reads_a_decimal_comma_when_told_and_says_so_when_not() {
+    let (names, rows) = run();
+    let dotted = |r: &[f64], half: bool| -> Vec<String> {
+        r.iter()
+            .enumerate()
+            .map(|(j, v)| {
+                if j == 0 && half {
+                    format!("{}", v + 0.5)
+                } else {
+                    v.to_string()
+                }
+            })
+            .collect()
+    };
+    let mut csv = names.join(",") + "\n";
+    let mut de = names.join(";") + "\n";
+    for r in rows.iter().take(6) {
+        csv += &(dotted(r, true).join(",") + "\n");
+        let cells: Vec<String> = dotted(r, true)
+            .iter()
+            .map(|c| c.replace('.', ","))
+            .collect();
+        de += &(cells.join(";") + "\n");
+    }
+    assert!(de.contains(",5;"), "a time with a decimal comma: {de}");
+    let dir = std::env::temp_dir();
+    let (a, b) = (
+        dir.join(format!("edge_dot_{}.csv", std::process::id())),
+        dir.join(format!("edge_de_{}.csv", std::process::id())),
+    );
+    std::fs::write(&a, csv).unwrap();
+    std::fs::write(&b, de).unwrap();
+    let model = fixtures().join("mlr_rise.json");
+    let edge = |args: &[&str]| Command::new(exe()).arg(&model).args(args).output().unwrap();
+    let want = edge(&[a.to_str().unwrap()]);
+    assert!(want.status.success());
+    let got = edge(&[b.to_str().unwrap(), "--delimiter", ";", "--decimal", ","]);
+    assert!(
+        got.status.success(),
+        "{}",
+        String::from_utf8_lossy(&got.stderr)
+    );
+    assert_eq!(
+        String::from_utf8_lossy(&got.stdout),
+        String::from_utf8_lossy(&want.stdout)
+    );
+    assert_eq!(String::from_utf8_lossy(&want.stdout).lines().count(), 7);
+    // the delimiter alone: every line refused with the hint, exit 2
+    let wrong = edge(&[b.to_str().unwrap(), "--delimiter", "semicolon"]);
+    assert_eq!(wrong.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&wrong.stderr);
+    assert!(
+        e.contains("line 2: column `time_s`: ") && e.contains("--decimal ,"),
+        "{e}"
+    );
+    // neither: the header read as one column names the delimiter it holds
+    let e = edge(&[b.to_str().unwrap()]);
+    assert_eq!(e.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&e.stderr).contains("separated by ';'"));
+    // a decimal comma between comma-separated fields is a usage error
+    let e = edge(&[a.to_str().unwrap(), "--decimal", ","]);
+    assert_eq!(e.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&e.stderr).contains("another field delimiter"));
+    let _ = std::fs::remove_file(&a);
+    let _ = std::fs::remove_file(&b);
+}
+
 /// Compiles `tests/c/NAME.c` against the staticlib cargo built next to this test's binary;
 /// `None` (the test skipped, said on stderr) without gcc.
 fn compile_c(name: &str) -> Option<PathBuf> {

@@ -5,8 +5,9 @@ use std::path::PathBuf;
 use numpy::{PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use thermerr_core::dialect::Dialect;
 use thermerr_core::metrics;
-use thermerr_core::run::{Dialect, NanPolicy, Run};
+use thermerr_core::run::{NanPolicy, Run};
 
 use crate::{slice1, vec_to_py, PyErrWrap};
 
@@ -88,7 +89,14 @@ fn is_data_column(name: &str) -> bool {
 /// Why a cell of `column` is not a number, in the CSV reader's words (`thermerr_core::run`).
 #[pyfunction]
 fn not_a_number(column: &str, cell: &str) -> String {
-    thermerr_core::run::not_a_number(column, cell)
+    thermerr_core::dialect::not_a_number(column, cell)
+}
+
+/// A field delimiter as a user writes it (`tab`, `\\t`, `comma`, `semicolon`, or the character
+/// itself) as the character (`thermerr_core::dialect::Dialect::delimiter_named`).
+#[pyfunction]
+fn delimiter_named(text: &str) -> String {
+    thermerr_core::dialect::Dialect::delimiter_named(text).to_string()
 }
 
 /// What makes probe `name` of run `source` unfit to be a fit's target: the line saying that it
@@ -161,6 +169,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(iso_seconds, m)?)?;
     m.add_function(wrap_pyfunction!(is_data_column, m)?)?;
     m.add_function(wrap_pyfunction!(not_a_number, m)?)?;
+    m.add_function(wrap_pyfunction!(delimiter_named, m)?)?;
     m.add_function(wrap_pyfunction!(probe_faults, m)?)?;
     m.add_function(wrap_pyfunction!(scores, m)?)?;
     m.add_function(wrap_pyfunction!(shape_series, m)?)?;
