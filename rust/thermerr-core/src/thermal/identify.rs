@@ -694,6 +694,36 @@ fn not_one_of(file: &str, entry: String, kind: &str, prefix: &str, cols: &[&str]
     )
 }
 
+/// Names compared as a person reads them: runs of digits by their value (`T_t2` before
+/// `T_t10`), the rest by character; equal values written differently (`t02`, `t2`) by the text.
+fn natural_order(a: &str, b: &str) -> std::cmp::Ordering {
+    fn chunks(s: &str) -> Vec<(bool, &str)> {
+        let mut out = Vec::new();
+        let mut start = 0;
+        let b = s.as_bytes();
+        for i in 1..=b.len() {
+            if i == b.len() || b[i].is_ascii_digit() != b[start].is_ascii_digit() {
+                out.push((b[start].is_ascii_digit(), &s[start..i]));
+                start = i;
+            }
+        }
+        out
+    }
+    let (ca, cb) = (chunks(a), chunks(b));
+    for (&(da, x), &(db, y)) in ca.iter().zip(&cb) {
+        let o = if da && db {
+            let (x0, y0) = (x.trim_start_matches('0'), y.trim_start_matches('0'));
+            x0.len().cmp(&y0.len()).then_with(|| x0.cmp(y0))
+        } else {
+            x.cmp(y)
+        };
+        if o.is_ne() {
+            return o;
+        }
+    }
+    ca.len().cmp(&cb.len()).then_with(|| a.cmp(b))
+}
+
 fn check_input<'a>(run: &'a Run, opts: &IdentifyOptions) -> Result<Checked<'a>> {
     let file = run.source.as_str();
     let with = |p: &str| -> Vec<&'a str> {
@@ -703,7 +733,7 @@ fn check_input<'a>(run: &'a Run, opts: &IdentifyOptions) -> Result<Checked<'a>> 
             .map(String::as_str)
             .collect()
     };
-    let (temps, mut inputs, errs) = (with("T_"), with("U_"), with("E_"));
+    let (mut temps, mut inputs, errs) = (with("T_"), with("U_"), with("E_"));
     if !opts.inputs.is_empty() {
         for (k, u) in opts.inputs.iter().enumerate() {
             if !inputs.contains(&u.as_str()) {
@@ -813,6 +843,11 @@ fn check_input<'a>(run: &'a Run, opts: &IdentifyOptions) -> Result<Checked<'a>> 
             }
         }
     }
+    // one network whatever the order the logger wrote its columns in: temperatures and inputs
+    // are taken in the natural order of their names (the probes keep theirs: the first axis
+    // calibrates the network); refusals above list them as the file does
+    temps.sort_by(|a, b| natural_order(a, b));
+    inputs.sort_by(|a, b| natural_order(a, b));
     Ok(Checked {
         temps,
         inputs,
@@ -997,6 +1032,9 @@ fn failed_columns(
 
 /// Fuzzy c-means on the rows of `x` (n × d); returns labels, the membership of each object in
 /// its own cluster, and the Xie–Beni index.
+/// Starts of fuzzy c-means in [`cluster`] (seeds `seed..seed + FCM_STARTS`).
+const FCM_STARTS: u64 = 20;
+
 fn cluster(
     x: &[f64],
     n: usize,
@@ -1004,12 +1042,24 @@ fn cluster(
     c: usize,
     seed: u64,
 ) -> Result<(Vec<usize>, Vec<f64>, f64)> {
-    let model = FcmParams::new(c)
-        .seed(Some(seed))
-        .max_iter(500)
-        .tol(1e-7)
-        .check()?
-        .fit(Samples::new(x, n, d)?)?;
+    // fuzzy c-means has local minima, and where its random start lands depends on the order
+    // of the sensors (the run's column order): several starts, the least objective kept
+    let mut model: Option<crate::fcm::FcmModel> = None;
+    for s in 0..FCM_STARTS {
+        let fit = FcmParams::new(c)
+            .seed(Some(seed.wrapping_add(s)))
+            .max_iter(500)
+            .tol(1e-7)
+            .check()?
+            .fit(Samples::new(x, n, d)?)?;
+        if model
+            .as_ref()
+            .is_none_or(|b| fit.objective < b.objective * (1.0 - 1e-9))
+        {
+            model = Some(fit);
+        }
+    }
+    let model = model.expect("at least one start");
     let u = &model.membership;
     let v = &model.centers;
     let mut labels = Vec::with_capacity(n);
@@ -2710,5 +2760,20 @@ fn toml_key(k: &str) -> String {
         k.to_string()
     } else {
         q(k)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_in_natural_order() {
+        let mut v = vec!["T_t10", "T_t2", "T_b", "T_t1", "T_a3", "T_t02", "T_a10"];
+        v.sort_by(|a, b| natural_order(a, b));
+        assert_eq!(
+            v,
+            ["T_a3", "T_a10", "T_b", "T_t1", "T_t02", "T_t2", "T_t10"]
+        );
     }
 }
