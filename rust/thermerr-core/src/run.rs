@@ -286,6 +286,14 @@ impl Run {
                         ", back to the first row's: {}",
                         crate::guard::ONE_RUN
                     ));
+                } else if columns.iter().all(|c| {
+                    let (a, b) = (c[i], c[i - 1]);
+                    a == b || (a.is_nan() && b.is_nan())
+                }) {
+                    reason.push_str(
+                        ": the row repeats the one before it in every column (a logger that \
+                         wrote it twice? remove one of them)",
+                    );
                 }
                 return Err(at(i, t_name, reason));
             }
@@ -688,6 +696,25 @@ mod tests {
         assert_eq!(unclosed_quote(b"1,\"a\"\"\"\n2,3", b','), None);
         assert_eq!(unclosed_quote(b"1,\"a\"\"\n2,3", b','), Some(1));
         assert_eq!(unclosed_quote(b"\n1,2,\"a\n\n3", b','), Some(2));
+    }
+
+    /// A logger that wrote a row twice: the refusal says so; a time repeated with other readings
+    /// is only a time that does not increase.
+    #[test]
+    fn a_row_written_twice_is_named_as_such() {
+        let e = err(
+            b"time_s,T_a,E_z\n0,20,0\n15,21,\n15,21,\n30,22,1\n",
+            NanPolicy::Interpolate,
+        );
+        assert!(
+            e.contains("row 3, column `time_s`: time is not strictly increasing (15 after 15): the row repeats the one before it in every column"),
+            "{e}"
+        );
+        let e = err(
+            b"time_s,T_a,E_z\n0,20,0\n15,21,0\n15,22,0\n",
+            NanPolicy::Error,
+        );
+        assert!(e.contains("(15 after 15)") && !e.contains("repeats"), "{e}");
     }
 
     #[test]
