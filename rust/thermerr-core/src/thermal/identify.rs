@@ -766,7 +766,11 @@ fn check_input<'a>(run: &'a Run, opts: &IdentifyOptions) -> Result<Checked<'a>> 
                 "the run has no error axis to map (an E_* column)",
             ));
         }
-        errs.iter().map(|s| s.to_string()).collect()
+        // every probe, in the natural order of their names: the first calibrates the network,
+        // so a run's column order does not choose it (given with --axis, the user's order)
+        let mut all: Vec<String> = errs.iter().map(|s| s.to_string()).collect();
+        all.sort_by(|a, b| natural_order(a, b));
+        all
     } else {
         for a in &opts.axes {
             if !a.starts_with("E_") || !errs.contains(&a.as_str()) {
@@ -844,8 +848,8 @@ fn check_input<'a>(run: &'a Run, opts: &IdentifyOptions) -> Result<Checked<'a>> 
         }
     }
     // one network whatever the order the logger wrote its columns in: temperatures and inputs
-    // are taken in the natural order of their names (the probes keep theirs: the first axis
-    // calibrates the network); refusals above list them as the file does
+    // are taken in the natural order of their names (and the probes, above, unless given);
+    // refusals above list them as the file does
     temps.sort_by(|a, b| natural_order(a, b));
     inputs.sort_by(|a, b| natural_order(a, b));
     Ok(Checked {
