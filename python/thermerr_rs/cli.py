@@ -851,7 +851,8 @@ def build_parser() -> argparse.ArgumentParser:
     ini = sub.add_parser("init", help="identify a starting machine model (thermal network TOML) from a run")
     ini.add_argument("run", help="measured run CSV (time_s, U_* inputs, T_* temperatures, E_* axes)")
     ini.add_argument("--axis", action="append", default=None,
-                     help="error axis to map, repeatable (default: every E_* column)")
+                     help="error axis to map, repeatable; the first calibrates the network (default: every "
+                          "E_* column, in the natural order of their names)")
     ini.add_argument("--out", required=True, help="machine TOML to write")
     ini.add_argument("--nodes", type=_positive_int, default=None,
                      help="number of nodes (default: the smallest Xie-Beni index over 2-5)")

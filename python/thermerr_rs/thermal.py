@@ -79,9 +79,11 @@ class Machine:
         the nodes that warm first with it (a note says so; the diagnosis on such a network is
         weaker: docs/machine-model.md, "A run with no input column").
 
-        ``axes``: the error columns to map (default every ``E_*`` column but a probe that reads
-        one value in every row, left out with a note; named, such a probe is a
-        :class:`ShapeError`). Returns the machine
+        ``axes``: the error columns to map, the first of which calibrates the network (default
+        every ``E_*`` column in the natural order of their names, but a probe that reads one
+        value in every row, left out with a note; named, such a probe is a :class:`ShapeError`).
+        Temperatures and inputs are taken in the natural order of their names too, so the run's
+        column order does not change the network. Returns the machine
         and a summary: ``ambient`` (``column``, ``rule``, ``reason``), ``nodes`` (each with
         ``sensor``, ``members``, ``tau_fit_s``, ``tau_s``, ``heated_by``), ``axes`` (each with
         ``train_rmse_um``, ``holdout_rmse_um`` and ``holdout_uncompensated_um``, the held-out RMS of
