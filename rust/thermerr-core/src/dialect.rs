@@ -140,6 +140,19 @@ impl Dialect {
     }
 }
 
+/// A field split from a line by hand, as a CSV reader gives it: trimmed, and without the pair of
+/// double quotes around it (`"T_a"`, `"20.5"`: a spreadsheet or logger that quotes every field,
+/// or its header). The library's reader (the `csv` crate) does this itself; the edge's line
+/// filter splits its lines by the delimiter and calls this. A quoted field holding the
+/// delimiter is not joined back (a run's fields are names, numbers and times).
+pub fn unquoted(field: &str) -> &str {
+    let f = field.trim();
+    match f.strip_prefix('"').and_then(|g| g.strip_suffix('"')) {
+        Some(inner) => inner.trim(),
+        None => f,
+    }
+}
+
 /// The refusal of a cell of `column` that is not a number, with the likely fix: for a decimal
 /// comma (a spreadsheet saved in a German or French locale writes `20,5` for 20.5), and for a
 /// logger's date-times in `time_s` (the column to name `time`). The CSV reader's, the edge's and
@@ -205,6 +218,15 @@ mod tests {
         assert!(dot.other_mark("20,5") && comma.other_mark("20.5"));
         assert!(!dot.other_mark("20.5") && !dot.other_mark("oops") && !dot.other_mark(""));
         assert!(!comma.other_mark("1.020,5") && !comma.other_mark("20,5"));
+    }
+
+    #[test]
+    fn a_quoted_field_is_read_without_its_quotes() {
+        assert_eq!(unquoted(" \"T_a\" "), "T_a");
+        assert_eq!(unquoted("\"20.5\""), "20.5");
+        assert_eq!(unquoted("20.5"), "20.5");
+        assert_eq!(unquoted("\""), "\"");
+        assert_eq!(unquoted("\"\""), "");
     }
 
     #[test]

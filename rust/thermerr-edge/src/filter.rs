@@ -2,9 +2,10 @@
 //! columns by name, then each data line becomes one sample. The CLI (`main.rs`) and the fuzz
 //! target `edge_stream` run lines through this one code path. Fields are split at the
 //! [`Dialect`]'s delimiter and numbers read under its decimal mark, by the core's rules (the
-//! library's CSV reader reads the same file the same way); fields are not quoted.
+//! library's CSV reader reads the same file the same way); a field in double quotes is read
+//! without them (a quoted field holding the delimiter is not joined back).
 
-use thermerr_core::dialect::Dialect;
+use thermerr_core::dialect::{unquoted, Dialect};
 use thermerr_core::guard::GuardedPredictor;
 use thermerr_core::timeaxis::{time_column, IsoClock, TimeKind, TIME_S};
 
@@ -59,7 +60,7 @@ impl LineFilter {
             .trim_start_matches('\u{feff}')
             .trim_end_matches(['\r', '\n'])
             .split(dialect.delimiter as char)
-            .map(str::trim)
+            .map(unquoted)
             .collect();
         if let Some(e) = dialect.one_column_header(&names) {
             return Err(e);
@@ -122,7 +123,7 @@ impl LineFilter {
         let time = match self.time {
             None => None,
             Some((k, TimeKind::Seconds)) => {
-                let t = f[k].trim();
+                let t = unquoted(f[k]);
                 match self.dialect.number(t) {
                     Some(v) if v.is_finite() => Some((t, v)),
                     Some(_) => return Err("column `time_s`: time is missing".into()),
@@ -133,7 +134,7 @@ impl LineFilter {
                 }
             }
             Some((k, TimeKind::Iso)) => {
-                let t = f[k].trim();
+                let t = unquoted(f[k]);
                 match self.clock.seconds(t) {
                     Ok(v) if v.is_finite() => Some((t, v)),
                     Ok(_) => return Err("column `time`: time is missing".into()),
@@ -142,7 +143,7 @@ impl LineFilter {
             }
         };
         for ((xv, &k), name) in self.x.iter_mut().zip(&self.features).zip(&self.names) {
-            let raw = f[k].trim();
+            let raw = unquoted(f[k]);
             match self.dialect.number(raw) {
                 Some(v) if v.is_finite() => *xv = v,
                 // a cell in the other decimal mark is the file read the wrong way, not a fault

@@ -258,6 +258,43 @@ fn binary_reads_a_decimal_comma_when_told_and_says_so_when_not() {
     let _ = std::fs::remove_file(&b);
 }
 
+/// A logger or spreadsheet that quotes its header, or every field (`"T_s01"`, `"20.5"`), is read
+/// as the library reads it: the same output as the plain file. Before, the quoted header was
+/// "the input has no column T_s01, ..." and nothing was predicted.
+#[test]
+fn binary_reads_quoted_fields() {
+    let (names, rows) = run();
+    let q = |s: &str| format!("\"{s}\"");
+    let mut plain = names.join(",") + "\n";
+    let header: Vec<String> = names.iter().map(|n| q(n)).collect();
+    let mut header_only = header.join(",") + "\n";
+    let mut every = header.join(",") + "\n";
+    for r in rows.iter().take(5) {
+        let cells: Vec<String> = r.iter().map(|v| v.to_string()).collect();
+        plain += &(cells.join(",") + "\n");
+        header_only += &(cells.join(",") + "\n");
+        every += &(cells.iter().map(|c| q(c)).collect::<Vec<_>>().join(",") + "\n");
+    }
+    let dir = std::env::temp_dir();
+    let model = fixtures().join("mlr_rise.json");
+    let out = |name: &str, text: &str| {
+        let path = dir.join(format!("edge_{name}_{}.csv", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        let o = Command::new(exe()).arg(&model).arg(&path).output().unwrap();
+        let _ = std::fs::remove_file(&path);
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let want = out("plain", &plain);
+    assert_eq!(want.lines().count(), 6);
+    assert_eq!(out("quoted_header", &header_only), want);
+    assert_eq!(out("quoted_all", &every), want);
+}
+
 /// Compiles `tests/c/NAME.c` against the staticlib cargo built next to this test's binary;
 /// `None` (the test skipped, said on stderr) without gcc.
 fn compile_c(name: &str) -> Option<PathBuf> {
