@@ -136,6 +136,22 @@ impl Run {
         let mut cells: Vec<Vec<f64>> = vec![Vec::new(); names.len()];
         let mut lines: Vec<u64> = Vec::new();
         let mut record = csv::StringRecord::new();
+        // a logger's row of units (`s, °C, µm`) or a second header under the first: the first
+        // row reads no number in any data cell (the words added to its refusal)
+        let units_row = |row: u64, record: &csv::StringRecord| -> String {
+            let no_number = record
+                .iter()
+                .zip(&parsed)
+                .filter(|(_, p)| **p)
+                .all(|(c, _)| dialect.number(c).is_none_or(f64::is_nan));
+            if row == 1 && no_number {
+                ", nor is any cell of the row (a row of units or a second header under the \
+                 header? remove it)"
+                    .to_string()
+            } else {
+                String::new()
+            }
+        };
         let mut row = 0u64;
         // the file's line of each record, counted here from its byte offset: the csv crate's
         // own count is one short after CRLF line ends and blank lines (rust-csv #395, #208)
@@ -179,7 +195,7 @@ impl Run {
                         line: Some(line),
                         row: Some(row),
                         column: Some(names[j].clone()),
-                        reason,
+                        reason: reason + &units_row(row, &record),
                     })?;
                     cells[j].push(v);
                     continue;
@@ -189,7 +205,7 @@ impl Run {
                     line: Some(line),
                     row: Some(row),
                     column: Some(names[j].clone()),
-                    reason: dialect.not_a_number(&names[j], cell),
+                    reason: dialect.not_a_number(&names[j], cell) + &units_row(row, &record),
                 })?;
                 cells[j].push(v);
             }
@@ -696,6 +712,30 @@ mod tests {
         assert_eq!(unclosed_quote(b"1,\"a\"\"\"\n2,3", b','), None);
         assert_eq!(unclosed_quote(b"1,\"a\"\"\n2,3", b','), Some(1));
         assert_eq!(unclosed_quote(b"\n1,2,\"a\n\n3", b','), Some(2));
+    }
+
+    /// A row of units under the header: the refusal says what it looks like; one bad cell in the
+    /// first row is only that cell.
+    #[test]
+    fn a_row_of_units_under_the_header_is_named_as_such() {
+        let e = err(b"time_s,T_a,E_z\ns,degC,um\n0,20,0\n", NanPolicy::Error);
+        assert!(
+            e.contains("row 1, column `time_s`: \"s\" is not a number, nor is any cell of the row (a row of units"),
+            "{e}"
+        );
+        let e = err(b"time_s,T_a,E_z\n0,x,0\n15,21,0\n", NanPolicy::Error);
+        assert!(
+            e.contains("\"x\" is not a number") && !e.contains("units"),
+            "{e}"
+        );
+        let e = err(
+            b"time,T_a,E_z\ndate,degC,\n2025-03-04T08:00:00,20,0\n",
+            NanPolicy::Error,
+        );
+        assert!(
+            e.contains("row 1, column `time`: ") && e.contains("a row of units"),
+            "{e}"
+        );
     }
 
     /// A logger that wrote a row twice: the refusal says so; a time repeated with other readings
