@@ -98,13 +98,10 @@ impl Dialect {
     /// (`20,5` in a file of decimal points, `20.5` under a decimal comma): a file read with the
     /// wrong `--decimal`, not a faulty reading.
     pub fn other_mark(&self, cell: &str) -> bool {
-        let other = if self.decimal == b',' {
-            Dialect::default()
-        } else {
-            Dialect {
-                delimiter: b';',
-                decimal: b',',
-            }
+        // `number` reads no delimiter: only the mark changes
+        let other = Dialect {
+            decimal: if self.decimal == b',' { b'.' } else { b',' },
+            ..*self
         };
         self.number(cell).is_none() && other.number(cell).is_some_and(f64::is_finite)
     }

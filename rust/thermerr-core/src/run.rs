@@ -4,7 +4,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-pub use crate::dialect::{not_a_number, Dialect};
+use crate::dialect::Dialect;
 use crate::error::{Error, Result};
 use crate::timeaxis::{time_column, IsoClock, TimeKind, TIME_ISO, TIME_S};
 
