@@ -137,11 +137,31 @@ impl Dialect {
     }
 }
 
+impl Dialect {
+    /// The fields of one line of text, as a CSV reader gives them: split at the delimiter
+    /// outside double quotes (a spreadsheet quotes a name holding the delimiter), each
+    /// [`unquoted`]. The library's reader (the `csv` crate) does this itself; the edge's
+    /// line filter reads its lines with this. An escaped quote inside a quoted field (`""`) is
+    /// left as written (a run's fields are names, numbers and times).
+    pub fn fields<'l>(&self, line: &'l str) -> Vec<&'l str> {
+        let mut out = Vec::new();
+        let (mut start, mut quoted) = (0, false);
+        for (i, b) in line.bytes().enumerate() {
+            if b == b'"' {
+                quoted = !quoted;
+            } else if b == self.delimiter && !quoted {
+                out.push(unquoted(&line[start..i]));
+                start = i + 1;
+            }
+        }
+        out.push(unquoted(&line[start..]));
+        out
+    }
+}
+
 /// A field split from a line by hand, as a CSV reader gives it: trimmed, and without the pair of
 /// double quotes around it (`"T_a"`, `"20.5"`: a spreadsheet or logger that quotes every field,
-/// or its header). The library's reader (the `csv` crate) does this itself; the edge's line
-/// filter splits its lines by the delimiter and calls this. A quoted field holding the
-/// delimiter is not joined back (a run's fields are names, numbers and times).
+/// or its header).
 pub fn unquoted(field: &str) -> &str {
     let f = field.trim();
     match f.strip_prefix('"').and_then(|g| g.strip_suffix('"')) {
@@ -224,6 +244,21 @@ mod tests {
         assert_eq!(unquoted("20.5"), "20.5");
         assert_eq!(unquoted("\""), "\"");
         assert_eq!(unquoted("\"\""), "");
+    }
+
+    #[test]
+    fn a_line_splits_at_the_delimiter_outside_quotes() {
+        let comma = Dialect::default();
+        assert_eq!(
+            comma.fields("\"0\",\"T_a, front\", \"T_b\" ,7"),
+            ["0", "T_a, front", "T_b", "7"]
+        );
+        let semi = Dialect::new(";", ",").unwrap();
+        assert_eq!(semi.fields("a;\"b;c\";;d"), ["a", "b;c", "", "d"]);
+        assert_eq!(semi.fields(""), [""]);
+        // an escaped quote keeps its field whole; an unclosed quote runs to the line's end
+        assert_eq!(semi.fields("\"x\"\"y\";z"), ["x\"\"y", "z"]);
+        assert_eq!(semi.fields("\"x;y"), ["\"x;y"]);
     }
 
     #[test]

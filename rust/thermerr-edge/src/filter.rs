@@ -3,9 +3,9 @@
 //! target `edge_stream` run lines through this one code path. Fields are split at the
 //! [`Dialect`]'s delimiter and numbers read under its decimal mark, by the core's rules (the
 //! library's CSV reader reads the same file the same way); a field in double quotes is read
-//! without them (a quoted field holding the delimiter is not joined back).
+//! without them, and a delimiter inside the quotes does not split it.
 
-use thermerr_core::dialect::{unquoted, Dialect};
+use thermerr_core::dialect::Dialect;
 use thermerr_core::guard::GuardedPredictor;
 use thermerr_core::timeaxis::{time_column, IsoClock, TimeKind, TIME_S};
 
@@ -56,12 +56,11 @@ impl LineFilter {
 
     /// [`LineFilter::new`] for lines written in `dialect` (another delimiter, a decimal comma).
     pub fn with_dialect(header: &str, p: &Predictor, dialect: Dialect) -> Result<Self, String> {
-        let names: Vec<&str> = header
-            .trim_start_matches('\u{feff}')
-            .trim_end_matches(['\r', '\n'])
-            .split(dialect.delimiter as char)
-            .map(unquoted)
-            .collect();
+        let names: Vec<&str> = dialect.fields(
+            header
+                .trim_start_matches('\u{feff}')
+                .trim_end_matches(['\r', '\n']),
+        );
         if let Some(e) = dialect.one_column_header(&names) {
             return Err(e);
         }
@@ -116,14 +115,14 @@ impl LineFilter {
         line: &'l str,
         missing_ok: bool,
     ) -> Result<(&[f64], Option<Stamp<'l>>), String> {
-        let f: Vec<&str> = line.split(self.dialect.delimiter as char).collect();
+        let f = self.dialect.fields(line);
         if f.len() != self.width {
             return Err(format!("expected {} fields, got {}", self.width, f.len()));
         }
         let time = match self.time {
             None => None,
             Some((k, TimeKind::Seconds)) => {
-                let t = unquoted(f[k]);
+                let t = f[k];
                 match self.dialect.number(t) {
                     Some(v) if v.is_finite() => Some((t, v)),
                     Some(_) => return Err("column `time_s`: time is missing".into()),
@@ -134,7 +133,7 @@ impl LineFilter {
                 }
             }
             Some((k, TimeKind::Iso)) => {
-                let t = unquoted(f[k]);
+                let t = f[k];
                 match self.clock.seconds(t) {
                     Ok(v) if v.is_finite() => Some((t, v)),
                     Ok(_) => return Err("column `time`: time is missing".into()),
@@ -143,7 +142,7 @@ impl LineFilter {
             }
         };
         for ((xv, &k), name) in self.x.iter_mut().zip(&self.features).zip(&self.names) {
-            let raw = unquoted(f[k]);
+            let raw = f[k];
             match self.dialect.number(raw) {
                 Some(v) if v.is_finite() => *xv = v,
                 // a cell in the other decimal mark is the file read the wrong way, not a fault

@@ -260,7 +260,8 @@ fn binary_reads_a_decimal_comma_when_told_and_says_so_when_not() {
 
 /// A logger or spreadsheet that quotes its header, or every field (`"T_s01"`, `"20.5"`), is read
 /// as the library reads it: the same output as the plain file. Before, the quoted header was
-/// "the input has no column T_s01, ..." and nothing was predicted.
+/// "the input has no column T_s01, ..." and nothing was predicted. A delimiter inside quotes does
+/// not split the field (before, such a line had one field too many and was rejected).
 #[test]
 fn binary_reads_quoted_fields() {
     let (names, rows) = run();
@@ -269,11 +270,14 @@ fn binary_reads_quoted_fields() {
     let header: Vec<String> = names.iter().map(|n| q(n)).collect();
     let mut header_only = header.join(",") + "\n";
     let mut every = header.join(",") + "\n";
+    // columns the model does not read, a name and cells quoted around the delimiter
+    let mut spare = header.join(",") + ",\"T_x, spare\",T_y\n";
     for r in rows.iter().take(5) {
         let cells: Vec<String> = r.iter().map(|v| v.to_string()).collect();
         plain += &(cells.join(",") + "\n");
         header_only += &(cells.join(",") + "\n");
         every += &(cells.iter().map(|c| q(c)).collect::<Vec<_>>().join(",") + "\n");
+        spare += &(cells.join(",") + ",2.5,\"1,5,0\"\n");
     }
     let dir = std::env::temp_dir();
     let model = fixtures().join("mlr_rise.json");
@@ -293,6 +297,7 @@ fn binary_reads_quoted_fields() {
     assert_eq!(want.lines().count(), 6);
     assert_eq!(out("quoted_header", &header_only), want);
     assert_eq!(out("quoted_all", &every), want);
+    assert_eq!(out("quoted_delimiter", &spare), want);
 }
 
 /// Compiles `tests/c/NAME.c` against the staticlib cargo built next to this test's binary;
