@@ -1050,3 +1050,48 @@ def test_a_part_no_sensor_reads_is_tried_behind_the_slowest_node(tmp_path, capsy
     syn.write_run_csv(run, c.train)
     assert main(["init", str(run), "--out", str(tmp_path / "m.toml")]) == 0
     assert f"{u['name']}" in capsys.readouterr().out.split("no sensor: a part behind column")[0].splitlines()[-1]
+
+
+def test_a_separate_holdout_run_trains_on_every_row_and_is_scored_from_its_first_readings(tmp_path):
+    """``holdout=`` (``thermerr init --holdout``): the held-out figures are of the other run,
+    simulated by the written file from that run's first readings, as any run is; every row of
+    the training run trains. A held-out run that continues the training run is its tail."""
+    c = syn.make_case("vmc", "none", 1, hours=(8, 4), dt=120.0)
+    train = tr.Run.from_frame(c.train, source="train")
+    test = tr.Run.from_frame(c.test, source="test")
+    m, s = Machine.identify(train, holdout=test)
+    assert (s["train_rows"], s["holdout_rows"], s["holdout_run"]) == (len(train), len(test), "test")
+    back = Machine.from_toml(s["toml"])
+    assert back.to_dict()["identified"]["holdout_run"] == "test"
+    # the figure a user recomputes: the file simulated on the held-out run against its probe
+    e = test.matrix(["E_z"])[:, 0]
+    pred = back.simulate(test).drift["E_z"]
+    got = s["axes"][0]["holdout_rmse_um"]
+    assert got == pytest.approx(float(np.sqrt(np.mean((pred - e) ** 2))), rel=1e-6)
+    assert s["axes"][0]["holdout_uncompensated_um"] == pytest.approx(float(np.sqrt(np.mean(e**2))), rel=1e-9)
+    # a run cut in two: the second piece is held out as the tail of one run
+    n, k = len(train), int(0.7 * len(train))
+    head = tr.Run.from_frame({name: np.asarray(v)[:k] for name, v in c.train.items()}, source="head")
+    tail = tr.Run.from_frame({name: np.asarray(v)[k:] for name, v in c.train.items()}, source="tail")
+    _, whole = Machine.identify(train)
+    _, cut = Machine.identify(head, holdout=tail)
+    assert cut["holdout_run"] is None and (cut["train_rows"], cut["holdout_rows"]) == (k, n - k)
+    assert whole["train_rows"] == k
+    assert [a["holdout_rmse_um"] for a in cut["axes"]] == pytest.approx(
+        [a["holdout_rmse_um"] for a in whole["axes"]], rel=1e-9)
+    # a held-out run without a column the network reads: one line naming it
+    short = tr.Run.from_frame({k2: v for k2, v in c.test.items() if k2 != "T_column"}, source="short")
+    with pytest.raises(DataError, match="short"):
+        Machine.identify(train, holdout=short)
+    # the command line
+    for name, part in (("train", c.train), ("test", c.test)):
+        cols = list(part)
+        np.savetxt(tmp_path / f"{name}.csv", np.column_stack([np.asarray(part[k2]) for k2 in cols]),
+                   delimiter=",", header=",".join(cols), comments="")
+    out = tmp_path / "m.toml"
+    r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", "init", str(tmp_path / "train.csv"),
+                        "--holdout", str(tmp_path / "test.csv"), "--out", str(out)],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "E_z: training RMS" in r.stdout and f"({tmp_path / 'test.csv'}, {len(test)} rows;" in r.stdout, r.stdout
+    assert Machine.load(out).to_dict()["identified"]["holdout_run"] == str(tmp_path / "test.csv")

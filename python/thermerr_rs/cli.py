@@ -509,11 +509,15 @@ def cmd_init(args: argparse.Namespace) -> int:
     from ._io import write_atomic
     from .thermal import Machine
 
-    _check_out(args.out, args.run)
+    _check_out(args.out, args.run, args.holdout)
     run = _read(args, args.run)
+    hold = _read(args, args.holdout) if args.holdout else None
+    if hold is not None and hold.continues(run):
+        _say(args, f"{hold.source} continues {run.source} (its clock starts {hold.time_s[0] - run.time_s[-1]:g} s after "
+                   f"{run.source}'s last sample): held out as the tail of one run, simulated from {run.source}'s start")
     _stage(args, f"identifying a thermal network from {run.source} ...")
     _, s = Machine.identify(run, args.axis, nodes=args.nodes, ambient=args.ambient, inputs=args.input,
-                            seed=args.seed)
+                            seed=args.seed, holdout=hold)
     write_atomic(args.out, s["toml"])
     if args.json:
         _print_json({k: v for k, v in s.items() if k != "toml"} | {"out": args.out})
@@ -533,13 +537,15 @@ def cmd_init(args: argparse.Namespace) -> int:
     if s["copies"]:
         _say(args, "second sensors on a part (lagged copies of a node's sensor, not nodes): " + ", ".join(
             f"{c['column']} ~ {c['of']} (lag {c['tau_s']:.0f} s)" for c in s["copies"]))
+    where = (f"{s['holdout_run']}, {s['holdout_rows']} rows" if s.get("holdout_run")
+             else f"last {s['holdout_rows']} rows")
     for a in s["axes"]:
         v = a["holdout_rmse_um"]  # None: the probe reads none of the held-out rows
         held = (f"{v:.3f} µm (no compensation: {a['holdout_uncompensated_um']:.3f} µm)"
                 if isinstance(v, float) and math.isfinite(v) else "none (its probe reads none of the held-out rows)")
         # the results: printed under --quiet too, as every command's are
         print(f"{a['axis']}: training RMS {a['train_rmse_um']:.3f} µm, "
-              f"held-out RMS {held} (last {s['holdout_rows']} rows; "
+              f"held-out RMS {held} ({where}; "
               f"probe noise {a['noise_um']:.2f} µm; simulated from the first readings, as any run is)")
     for note in s["notes"]:
         _say(args, f"note: {note}")
@@ -861,6 +867,9 @@ def build_parser() -> argparse.ArgumentParser:
                      help="an input that heats the machine, repeatable (default: every U_* column; "
                           "name the real heat inputs when the log carries others, e.g. a program number)")
     ini.add_argument("--seed", type=int, default=0, help="seed of the fuzzy c-means start (default 0)")
+    ini.add_argument("--holdout", default=None, metavar="RUN",
+                     help="a separate run to hold out (the same machine, another day): every row of RUN trains "
+                          "(default: the last 30 %% of RUN is held out)")
     common(ini)
     ini.set_defaults(func=cmd_init)
 

@@ -65,7 +65,7 @@ class Machine:
     def identify(cls, run: Run, axes: str | list[str] | None = None, *, nodes: int | None = None,
                  ambient: str | None = None, inputs: str | list[str] | None = None,
                  train_fraction: float = 0.7, seed: int = 0,
-                 max_iter: int = 100) -> tuple[Machine, dict[str, Any]]:
+                 max_iter: int = 100, holdout: Run | None = None) -> tuple[Machine, dict[str, Any]]:
         """Identify a starting network from a run alone (docs/machine-model.md, "Starting from
         data"): pick the ambient, group the other sensors into nodes by fuzzy c-means, place the
         sources, link the nodes by response order, set values from each node's time constant and
@@ -104,13 +104,23 @@ class Machine:
         heats nothing, a program number or a tool number, would be given heat sources all the
         same, since a run's temperatures cannot tell it from a heat source that moves with the
         spindle: name the real ones).
+        ``holdout``: a separate run to hold out (the same machine, another day): every row of
+        ``run`` trains (``train_fraction`` is not used), and the held-out figures are of
+        ``holdout``, simulated from its own first readings; the summary's ``holdout_run`` names it
+        (``None``: the held-out rows are the last ``1 - train_fraction`` of ``run``). A
+        ``holdout`` that continues ``run`` (its clock goes on from ``run``'s last sample: a log cut
+        in two) is joined to it and held out as its tail, as :func:`diagnose` does.
         Bad input (no ``T_*`` column, no ``E_*`` axis, an unknown ``ambient`` or input, more ``nodes``
-        than sensors) raises a :class:`~thermerr_rs.errors.DataError` naming the run and the entry.
+        than sensors, a ``holdout`` without a column the network reads) raises a :class:`~thermerr_rs.errors.DataError` naming the run and the entry.
         """
         ax = [axes] if isinstance(axes, str) else (list(axes) if axes is not None else None)
         ins = [inputs] if isinstance(inputs, str) else (list(inputs) if inputs is not None else None)
-        inner, summary = _core.MachineModel.identify(*_run_args(run), axes=ax, nodes=nodes, ambient=ambient,
-                                                     inputs=ins, train_fraction=train_fraction, seed=seed,
+        run, holdout, train_rows = _joined(run, holdout)
+        inner, summary = _core.MachineModel.identify(*_run_args(run),
+                                                     _run_args(holdout) if holdout is not None else None,
+                                                     axes=ax, nodes=nodes, ambient=ambient,
+                                                     inputs=ins, train_fraction=train_fraction,
+                                                     train_rows=train_rows, seed=seed,
                                                      max_iter=max_iter)
         s: dict[str, Any] = json.loads(summary)
         _warn_suspects(sp["text"] for sp in s["suspect_readings"])

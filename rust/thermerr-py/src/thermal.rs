@@ -187,7 +187,7 @@ impl PyMachine {
     /// Identifies a starting network from a run (thermal::identify); returns the machine and
     /// the summary as JSON text (its `toml` field is the commented file).
     #[staticmethod]
-    #[pyo3(signature = (source, time, names, data, *, axes = None, nodes = None, ambient = None, inputs = None, train_fraction = 0.7, seed = 0, max_iter = 100))]
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axes = None, nodes = None, ambient = None, inputs = None, train_fraction = 0.7, train_rows = None, seed = 0, max_iter = 100))]
     #[allow(clippy::too_many_arguments)]
     fn identify<'py>(
         py: Python<'py>,
@@ -195,26 +195,33 @@ impl PyMachine {
         time: PyReadonlyArray1<'py, f64>,
         names: Vec<String>,
         data: PyReadonlyArray2<'py, f64>,
+        holdout: PyHoldout<'py>,
         axes: Option<Vec<String>>,
         nodes: Option<usize>,
         ambient: Option<String>,
         inputs: Option<Vec<String>>,
         train_fraction: f64,
+        train_rows: Option<usize>,
         seed: u64,
         max_iter: usize,
     ) -> PyResult<(PyMachine, String)> {
         let run = core_run(source, &time, names, &data)?;
+        let hold = holdout
+            .as_ref()
+            .map(|(s, t, n, d)| core_run(s, t, n.clone(), d))
+            .transpose()?;
         let opts = IdentifyOptions {
             axes: axes.unwrap_or_default(),
             nodes,
             ambient,
             inputs: inputs.unwrap_or_default(),
             train_fraction,
+            train_rows,
             seed,
             max_iter,
             ..IdentifyOptions::default()
         };
-        let id = crate::detach(py, || identify(&run, &opts))?;
+        let id = crate::detach(py, || identify(&run, hold.as_ref(), &opts))?;
         let summary = serde_json::to_string(&id)
             .map_err(|e| PyErrWrap(thermerr_core::Error::Format(e.to_string())))?;
         Ok((

@@ -185,6 +185,9 @@ pub struct IdentifyOptions {
     pub inputs: Vec<String>,
     /// Share of the rows used for training; the rest is held out.
     pub train_fraction: f64,
+    /// The training rows exactly, instead of `train_fraction` (a held-out run that continues
+    /// the training run, joined to it: its rows are the tail).
+    pub train_rows: Option<usize>,
     pub max_nodes: usize,
     pub seed: u64,
     pub max_iter: usize,
@@ -198,6 +201,7 @@ impl Default for IdentifyOptions {
             ambient: None,
             inputs: Vec::new(),
             train_fraction: 0.7,
+            train_rows: None,
             max_nodes: 5,
             seed: 0,
             max_iter: 100,
@@ -260,6 +264,8 @@ pub struct Identification {
     pub axes: Vec<AxisFit>,
     pub train_rows: usize,
     pub holdout_rows: usize,
+    /// The separate held-out run's source, when one was given (every row of the run trains).
+    pub holdout_run: Option<String>,
     /// Temperatures left out of the network by the screening, each with its reason.
     pub spare: Vec<String>,
     /// Temperatures that are lagged copies of a node's sensor (second sensors on its part):
@@ -1103,14 +1109,29 @@ fn cluster(
 }
 
 /// Identifies a starting network from a run (module docs).
-pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
+pub fn identify(
+    run: &Run,
+    holdout: Option<&Run>,
+    opts: &IdentifyOptions,
+) -> Result<Identification> {
     let file = run.source.clone();
     let mut ck = check_input(run, opts)?;
     let view = RunView::new(run);
     view.one_run()?;
+    let hview = holdout.map(RunView::new);
+    if let Some(h) = &hview {
+        h.one_run()?;
+    }
     let n = run.time_s.len();
-    let frac = opts.train_fraction.clamp(0.1, 1.0);
-    let m = ((n as f64 * frac).floor() as usize).clamp(10, n);
+    // a separate held-out run: every row of `run` trains
+    let m = match (holdout, opts.train_rows) {
+        (Some(_), _) => n,
+        (None, Some(rows)) => rows.clamp(10, n),
+        (None, None) => {
+            let frac = opts.train_fraction.clamp(0.1, 1.0);
+            ((n as f64 * frac).floor() as usize).clamp(10, n)
+        }
+    };
     let t = &run.time_s[..m];
     let mut notes = Vec::new();
     // readings the run itself makes suspect: said, not changed
@@ -2023,19 +2044,37 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     // the start of the stated figures (`[start]`): the first readings as they are
     let init: Vec<f64> = vec![0.0; machine.nodes.len()];
     let sim = simulate(&machine, &view, &Init::Offsets(init.clone()))?;
+    // the held-out run: every column the file reads, and simulated from its own first readings
+    let hsim = match &hview {
+        Some(h) => {
+            machine.check_columns(&format!("{file} (identified)"), &h.source, |c| h.has(c))?;
+            Some(simulate(&machine, h, &Init::Offsets(init.clone()))?)
+        }
+        None => None,
+    };
     let mut axes = Vec::new();
     for (ax, pred) in &sim.drift {
         // a failing probe's rows are not scored
         let e = Reading::of(&view, ax)?;
-        let err = |p: &[f64], rows: std::ops::Range<usize>| e.rmse(p, rows);
+        let (holdout_rmse_um, holdout_uncompensated_um) = match (&hview, &hsim) {
+            (Some(h), Some(hs)) => {
+                let eh = Reading::of(h, ax)?;
+                let nh = h.len();
+                let p = hs.drift.iter().find(|(a, _)| a == ax).map(|(_, p)| p);
+                let p = p.ok_or_else(|| Error::Format(format!("no simulated drift of {ax}")))?;
+                (eh.rmse(p, 0..nh), eh.rmse(&vec![0.0; nh], 0..nh))
+            }
+            _ => (e.rmse(pred, m..n), e.rmse(&vec![0.0; n], m..n)),
+        };
         axes.push(AxisFit {
             axis: ax.clone(),
-            train_rmse_um: err(pred, 0..m),
-            holdout_rmse_um: err(pred, m..n),
-            holdout_uncompensated_um: err(&vec![0.0; n], m..n),
+            train_rmse_um: e.rmse(pred, 0..m),
+            holdout_rmse_um,
+            holdout_uncompensated_um,
             noise_um: e.noise(m),
         });
     }
+    let n_held = hview.as_ref().map_or(n - m, |h| h.len());
     // a drift map whose node terms cancel: each term far larger than the axis's drift
     let cancelling: Vec<String> = (0..machine.drift.len())
         .filter_map(|d| {
@@ -2066,7 +2105,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         .filter_map(|a| {
             let none = a.holdout_uncompensated_um;
             // within the `none` bar both are noise: nothing to say
-            (n > m && a.holdout_rmse_um > none.max(ratio * a.noise_um)).then(|| {
+            (n_held > 0 && a.holdout_rmse_um > none.max(ratio * a.noise_um)).then(|| {
                 format!(
                     "{} ({:.1} µm against {none:.1} µm)",
                     a.axis, a.holdout_rmse_um
@@ -2087,7 +2126,7 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     // is either a cause or a remainder, and a remainder is the likelier answer
     let over: Vec<String> = axes
         .iter()
-        .filter(|a| n > m && a.holdout_rmse_um > ratio * a.noise_um)
+        .filter(|a| n_held > 0 && a.holdout_rmse_um > ratio * a.noise_um)
         .map(|a| {
             format!(
                 "{} ({:.1}x)",
@@ -2109,7 +2148,8 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
     machine.identified = Some(Identified {
         source: file.clone(),
         train_rows: m,
-        holdout_rows: n - m,
+        holdout_rows: n_held,
+        holdout_run: holdout.map(|h| h.source.clone()),
         ambient_rule: ambient.rule.clone(),
         node_rule: node_rule.clone(),
         train_rmse_um: axes
@@ -2188,7 +2228,8 @@ pub fn identify(run: &Run, opts: &IdentifyOptions) -> Result<Identification> {
         sources: source_notes,
         axes,
         train_rows: m,
-        holdout_rows: n - m,
+        holdout_rows: n_held,
+        holdout_run: holdout.map(|h| h.source.clone()),
         spare,
         copies,
         notes,
@@ -2576,10 +2617,16 @@ fn commented_toml(id: &Identification) -> Result<String> {
         o.push_str(s);
         o.push('\n');
     };
-    line(&format!(
-        "# Identified by `thermerr init` from {} ({} training rows, the last {} held out).",
-        id.source, id.train_rows, id.holdout_rows
-    ));
+    line(&match &id.holdout_run {
+        Some(h) => format!(
+            "# Identified by `thermerr init` from {} ({} training rows; held out: {}, {} rows).",
+            id.source, id.train_rows, h, id.holdout_rows
+        ),
+        None => format!(
+            "# Identified by `thermerr init` from {} ({} training rows, the last {} held out).",
+            id.source, id.train_rows, id.holdout_rows
+        ),
+    });
     line("# A starting point: every value below is calibrated on the training rows and may be edited.");
     line("# Temperatures fix no absolute scale: sources are 100 W at the input's maximum before");
     line("# calibration, so capacities and conductances are in that convention.");
@@ -2722,6 +2769,9 @@ fn commented_toml(id: &Identification) -> Result<String> {
         line(&format!("source = {}", q(&p.source)));
         line(&format!("train_rows = {}", p.train_rows));
         line(&format!("holdout_rows = {}", p.holdout_rows));
+        if let Some(h) = &p.holdout_run {
+            line(&format!("holdout_run = {}", q(h)));
+        }
         line(&format!("ambient_rule = {}", q(&p.ambient_rule)));
         line(&format!("node_rule = {}", q(&p.node_rule)));
         for (key, map) in [

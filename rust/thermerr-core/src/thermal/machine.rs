@@ -157,6 +157,10 @@ pub struct Identified {
     pub source: String,
     pub train_rows: usize,
     pub holdout_rows: usize,
+    /// A separate held-out run's source (`thermerr init --holdout`); absent: the held-out rows
+    /// are the last of `source`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub holdout_run: Option<String>,
     /// The ambient column's rule (`given`, `named`, `coldest`) and the node count's rule.
     pub ambient_rule: String,
     pub node_rule: String,
