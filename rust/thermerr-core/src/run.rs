@@ -297,7 +297,14 @@ impl Run {
                         t - time[i - 1]
                     ),
                 };
-                if *t <= time[0] {
+                let back = time[i - 1] - t;
+                if kind == TimeKind::Iso && (3000.0..=3600.0).contains(&back) {
+                    // a local clock set back an hour: the end of daylight saving time
+                    reason.push_str(
+                        ": an hour back (a local clock leaving daylight saving time? write the \
+                         times in UTC or with their offset, such as 2026-10-25T02:00:15+01:00)",
+                    );
+                } else if *t <= time[0] {
                     reason.push_str(&format!(
                         ", back to the first row's: {}",
                         crate::guard::ONE_RUN
@@ -755,6 +762,31 @@ mod tests {
             NanPolicy::Error,
         );
         assert!(e.contains("(15 after 15)") && !e.contains("repeats"), "{e}");
+    }
+
+    /// A local clock that leaves daylight saving time repeats an hour: the refusal says so and
+    /// how to write the times; a step back of another size does not.
+    #[test]
+    fn a_clock_set_back_an_hour_is_named_as_such() {
+        let e = err(
+            b"time,T_a,E_z\n2026-10-25T02:59:30,20,0\n2026-10-25T02:59:45,21,0\n2026-10-25T02:00:00,22,0\n",
+            NanPolicy::Error,
+        );
+        assert!(
+            e.contains("row 3, column `time`: time is not strictly increasing (-3585 s after the row before): an hour back (a local clock leaving daylight saving time?"),
+            "{e}"
+        );
+        let e = err(
+            b"time,T_a,E_z\n2026-10-25T02:59:30,20,0\n2026-10-25T02:59:45,21,0\n2026-10-25T02:30:00,22,0\n",
+            NanPolicy::Error,
+        );
+        assert!(!e.contains("an hour back"), "{e}");
+        // a clock of seconds has no daylight saving time
+        let e = err(
+            b"time_s,T_a,E_z\n3590,20,0\n3600,21,0\n15,22,0\n",
+            NanPolicy::Error,
+        );
+        assert!(!e.contains("an hour back"), "{e}");
     }
 
     #[test]
