@@ -1095,3 +1095,24 @@ def test_a_separate_holdout_run_trains_on_every_row_and_is_scored_from_its_first
     assert r.returncode == 0, r.stderr
     assert "E_z: training RMS" in r.stdout and f"({tmp_path / 'test.csv'}, {len(test)} rows;" in r.stdout, r.stdout
     assert Machine.load(out).to_dict()["identified"]["holdout_run"] == str(tmp_path / "test.csv")
+
+
+def test_the_file_keeps_the_fit_whose_drift_maps_predict_the_training_folds_better():
+    """Step 8, "Which fit": the network calibrated with the first axis and the one calibrated
+    on the temperatures alone; the file keeps the one whose drift maps predict the probes
+    better across blocked folds of the training rows, says so in a note, and reports both."""
+    c = syn.make_shop_case(1, hours=12.0)
+    run = tr.Run.from_frame(c.train, source="shop")
+    m, s = Machine.identify(run)
+    f = s["network_fit"]
+    axes = [a["axis"] for a in s["axes"]]
+    assert f["axis"] == axes[0]
+    for k in ("with_axis", "temperatures"):
+        # per axis a share of its squares, summed: between exact and no better than zero drift
+        assert 0.0 < f[k] < len(axes), f
+    assert f["kept"] == ("temperatures" if f["temperatures"] < f["with_axis"] else "axis"), f
+    kept = "calibrated on the temperatures alone" if f["kept"] == "temperatures" else f"calibrated with {axes[0]}"
+    assert any(n.startswith(f"the network's values are the ones {kept}") for n in s["notes"]), s["notes"]
+    assert f"the network's values are the ones {kept}" in s["toml"]
+    # the same run gives the same choice
+    assert Machine.identify(run)[1]["network_fit"] == f

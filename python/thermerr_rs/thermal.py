@@ -96,7 +96,11 @@ class Machine:
         ``k_per_h``, ``share`` of the training misfit it removes, ``slowest_tau_s``, ``kept``
         when it removes at least half and the training rows last that time constant; kept, the
         network's values are the ones calibrated beside it, and the file has no drift term),
-        ``suspect_readings`` (readings the run itself
+        ``network_fit`` (which fit of the network's values the file keeps, step 8 of
+        docs/machine-model.md: ``with_axis``, the network calibrated with the first axis, and
+        ``temperatures``, the one calibrated on the temperatures alone, each the drift maps'
+        blocked-fold squared error over the probes' squares summed over the axes; ``kept``,
+        ``"axis"`` or ``"temperatures"``, the lower; ``None`` with one axis), ``suspect_readings`` (readings the run itself
         makes suspect, as in a diagnosis's report; also warned as
         :class:`~thermerr_rs.errors.SuspectReadingWarning`) and
         ``toml``, the file with a comment on every choice (what ``thermerr init`` writes).

@@ -544,50 +544,74 @@ pub fn forward_penalty(x: &[Vec<f64>], y: &[f64], held_share: f64) -> Result<f64
 /// others; the smallest on a tie); too few rows for the folds: the smallest. Returns the
 /// coefficients on every row and the penalty.
 pub fn ridge_by_folds(x: &[Vec<f64>], y: &[f64]) -> Result<(Vec<f64>, f64)> {
-    let (n, p) = (y.len(), x.len());
     let cols: Vec<&[f64]> = x.iter().map(Vec::as_slice).collect();
+    let lambda = folds_best(&cols, y)?.map_or(RIDGE_GRID[0], |b| b.1);
+    Ok((ridge(&cols, y, lambda)?, lambda))
+}
+
+/// The ridge penalty of [`RIDGE_GRID`] that predicts `y` best across [`RIDGE_FOLDS`] contiguous
+/// blocks (the smallest on a tie) and its blocked-fold squared error; `None` with too few rows
+/// for the folds.
+fn folds_best(cols: &[&[f64]], y: &[f64]) -> Result<Option<(f64, f64)>> {
+    let (n, p) = (y.len(), cols.len());
     let mut best = (f64::INFINITY, RIDGE_GRID[0]);
-    if n >= RIDGE_FOLDS * (2 * p + 10) {
-        let edge = |k: usize| k * n / RIDGE_FOLDS;
-        // each block's Gram matrix and Xᵀy, once: a fold's are the sums over the other blocks
-        let blocks = (0..RIDGE_FOLDS)
-            .map(|f| {
-                let r = edge(f)..edge(f + 1);
-                let bc: Vec<&[f64]> = cols.iter().map(|c| &c[r.clone()]).collect();
-                let xty: Vec<f64> = bc.iter().map(|c| dot(c, &y[r.clone()])).collect();
-                Ok((gram(&bc, r.len())?, xty))
-            })
-            .collect::<Result<Vec<_>>>()?;
-        for &lambda in &RIDGE_GRID {
-            crate::interrupt::check()?;
-            let mut sse = 0.0;
-            for f in 0..RIDGE_FOLDS {
-                let (mut g, mut rhs) = (vec![0.0; p * p], vec![0.0; p]);
-                for (_, (gb, bb)) in blocks.iter().enumerate().filter(|(b, _)| *b != f) {
-                    g.iter_mut().zip(gb).for_each(|(a, v)| *a += v);
-                    rhs.iter_mut().zip(bb).for_each(|(a, v)| *a += v);
-                }
-                let s = (0..p).map(|j| g[j * p + j]).sum::<f64>() / p as f64;
-                for j in 0..p {
-                    g[j * p + j] += lambda * s;
-                }
-                let Some(chol) = Cholesky::new(&g, p) else {
-                    sse = f64::INFINITY; // not positive definite at this penalty: not chosen
-                    break;
-                };
-                let c = chol.solve(&rhs);
-                sse += (edge(f)..edge(f + 1))
-                    .map(|k| {
-                        (y[k] - c.iter().zip(&cols).map(|(c, b)| c * b[k]).sum::<f64>()).powi(2)
-                    })
-                    .sum::<f64>();
+    if n < RIDGE_FOLDS * (2 * p + 10) {
+        return Ok(None);
+    }
+    let edge = |k: usize| k * n / RIDGE_FOLDS;
+    // each block's Gram matrix and Xᵀy, once: a fold's are the sums over the other blocks
+    let blocks = (0..RIDGE_FOLDS)
+        .map(|f| {
+            let r = edge(f)..edge(f + 1);
+            let bc: Vec<&[f64]> = cols.iter().map(|c| &c[r.clone()]).collect();
+            let xty: Vec<f64> = bc.iter().map(|c| dot(c, &y[r.clone()])).collect();
+            Ok((gram(&bc, r.len())?, xty))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    for &lambda in &RIDGE_GRID {
+        crate::interrupt::check()?;
+        let mut sse = 0.0;
+        for f in 0..RIDGE_FOLDS {
+            let (mut g, mut rhs) = (vec![0.0; p * p], vec![0.0; p]);
+            for (_, (gb, bb)) in blocks.iter().enumerate().filter(|(b, _)| *b != f) {
+                g.iter_mut().zip(gb).for_each(|(a, v)| *a += v);
+                rhs.iter_mut().zip(bb).for_each(|(a, v)| *a += v);
             }
-            if sse < best.0 {
-                best = (sse, lambda);
+            let s = (0..p).map(|j| g[j * p + j]).sum::<f64>() / p as f64;
+            for j in 0..p {
+                g[j * p + j] += lambda * s;
             }
+            let Some(chol) = Cholesky::new(&g, p) else {
+                sse = f64::INFINITY; // not positive definite at this penalty: not chosen
+                break;
+            };
+            let c = chol.solve(&rhs);
+            sse += (edge(f)..edge(f + 1))
+                .map(|k| (y[k] - c.iter().zip(cols).map(|(c, b)| c * b[k]).sum::<f64>()).powi(2))
+                .sum::<f64>();
+        }
+        if sse < best.0 {
+            best = (sse, lambda);
         }
     }
-    Ok((ridge(&cols, y, best.1)?, best.1))
+    Ok(Some(best))
+}
+
+/// How well axis `d`'s drift map on node temperatures `temps` predicts its error across blocked
+/// folds of the first `rows` ([`folds_best`]): the folds' squared error over the error's own sum
+/// of squares (0: exact; 1: no better than zero drift); `None` with too few rows.
+pub fn drift_folds_share(
+    m: &Machine,
+    d: usize,
+    run: &RunView<'_>,
+    temps: &[f64],
+    error: &Reading<'_>,
+    rows: usize,
+) -> Result<Option<f64>> {
+    let (x, y) = kept_terms(m, d, run, temps, error, rows)?;
+    let cols: Vec<&[f64]> = x.iter().map(Vec::as_slice).collect();
+    let ss = y.iter().map(|v| v * v).sum::<f64>();
+    Ok(folds_best(&cols, &y)?.map(|(sse, _)| sse / ss.max(f64::MIN_POSITIVE)))
 }
 
 /// Weak prior (centre, width) of a linear drift coefficient: nominal node coefficients are kept
