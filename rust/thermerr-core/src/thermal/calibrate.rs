@@ -609,6 +609,9 @@ pub fn drift_folds_share(
     rows: usize,
 ) -> Result<Option<f64>> {
     let (x, y) = kept_terms(m, d, run, temps, error, rows)?;
+    if x.is_empty() {
+        return Ok(Some(1.0)); // no term: the map predicts zero drift
+    }
     let cols: Vec<&[f64]> = x.iter().map(Vec::as_slice).collect();
     let ss = y.iter().map(|v| v * v).sum::<f64>();
     Ok(folds_best(&cols, &y)?.map(|(sse, _)| sse / ss.max(f64::MIN_POSITIVE)))
