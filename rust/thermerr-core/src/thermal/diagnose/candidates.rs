@@ -64,6 +64,8 @@ fn linear_param(param: Param, lo: f64, hi: f64, start: f64) -> FreeParam {
 pub const LAG_RANGE_S: (f64, f64) = (30.0, 30000.0);
 /// The range of an unmodelled source's link (W/K); at its floor the source does nothing.
 pub const SOURCE_RANGE_W_PER_K: (f64, f64) = (0.01, 200.0);
+/// The range of a speed growth's exponent.
+pub const GROWTH_EXPONENT_RANGE: (f64, f64) = (0.5, 3.0);
 
 pub(super) fn thermal_lag(m: &Machine, axis: usize) -> Spec {
     let mut lag = m.clone();
@@ -113,7 +115,12 @@ pub(super) fn speed_growth(m: &Machine, axis: usize, run: &RunView<'_>) -> Vec<S
         out.push(Spec::new(
             Cause::SpeedGrowth,
             sg,
-            vec![linear_param(Param::InputExponent(axis, k), 0.5, 3.0, 2.0)],
+            vec![linear_param(
+                Param::InputExponent(axis, k),
+                GROWTH_EXPONENT_RANGE.0,
+                GROWTH_EXPONENT_RANGE.1,
+                2.0,
+            )],
         ));
     }
     out

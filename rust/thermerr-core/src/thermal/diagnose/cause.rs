@@ -70,6 +70,18 @@ impl Cause {
         }
     }
 
+    /// The range the search allows the fitted parameter `name` of [`Cause::parameters`]
+    /// (`None`: a linear term, not bounded by the search).
+    pub fn search_range(self, name: &str) -> Option<(f64, f64)> {
+        use super::candidates::{GROWTH_EXPONENT_RANGE, LAG_RANGE_S, SOURCE_RANGE_W_PER_K};
+        match (self, name) {
+            (Cause::ThermalLag, "tau_s") => Some(LAG_RANGE_S),
+            (Cause::UnmodeledSource, "w_per_k") => Some(SOURCE_RANGE_W_PER_K),
+            (Cause::SpeedGrowth, "exponent") => Some(GROWTH_EXPONENT_RANGE),
+            _ => None,
+        }
+    }
+
     /// This cause's fitted parameters, read from the calibrated extension `m` (drift entry
     /// `axis`; `node`: the spec's node).
     pub fn parameters(self, m: &Machine, axis: usize, node: Option<&str>) -> BTreeMap<String, f64> {

@@ -1,9 +1,11 @@
 //! The English sentence that states the verdict and the figures behind it.
 
+use std::collections::BTreeMap;
+
 use super::rounds::{Accepted, Round, MIN_SHARE_OF_EXCESS};
 use super::verdict::{supported, Verdict, MAX_DELTA_BIC};
 use super::{
-    BaselineNetwork, Candidate, Fit, Holdout, NetworkRule, NetworkUsed, StartCheck,
+    BaselineNetwork, Candidate, Cause, Fit, Holdout, NetworkRule, NetworkUsed, StartCheck,
     SECOND_START_FACTOR, TRAINING_TIE,
 };
 
@@ -165,13 +167,36 @@ fn error_change(axis: &str, base: &Holdout, c: &Candidate) -> String {
 }
 
 /// The sentence for the named candidate `cands[i]` (`cands` sorted by score, best first).
+/// A named cause's fitted parameters as the evidence states them, `name = value`; one that ended
+/// at a bound of the search ([`Cause::search_range`], within 0.1 %) says so: the data asked for
+/// more than the cause may model, and the value is that bound, not an estimate.
+pub fn params_text(cause: Cause, params: &BTreeMap<String, f64>) -> String {
+    params
+        .iter()
+        .map(|(k, &v)| {
+            let at = cause.search_range(k).and_then(|(lo, hi)| {
+                if v >= hi / 1.001 {
+                    Some("ceiling")
+                } else if v <= lo * 1.001 {
+                    Some("floor")
+                } else {
+                    None
+                }
+            });
+            match at {
+                Some(b) => format!(
+                    "{k} = {v:.4}, at the search's {b}: the data ask for more than this cause may \
+                     model, so the value is that bound, not an estimate"
+                ),
+                None => format!("{k} = {v:.4}"),
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 pub fn named(cands: &[Candidate], i: usize, base: &Holdout, axis: &str) -> String {
     let c = &cands[i];
-    let params: Vec<String> = c
-        .parameters
-        .iter()
-        .map(|(k, v)| format!("{k} = {v:.4}"))
-        .collect();
     let what = place(c.cause, c.column.as_deref(), c.node.as_deref());
     let sensor = match c.sensor_gain_pct {
         Some(g) if c.holdout.rmse_um < base.rmse_um => {
@@ -194,7 +219,7 @@ pub fn named(cands: &[Candidate], i: usize, base: &Holdout, axis: &str) -> Strin
     };
     format!(
         "Extending the calibrated model with {what} ({}) {}{sensor}; it removes {:.0} % of the normalised held-out residual, the most of {among}, and improves the training fit by ΔBIC = {:.0}.",
-        params.join(", "),
+        params_text(c.cause, &c.parameters),
         error_change(axis, base, c),
         100.0 * c.score,
         c.delta_bic
@@ -212,11 +237,6 @@ pub fn named_later(
     axis: &str,
     n_named: usize,
 ) -> String {
-    let params: Vec<String> = c
-        .params
-        .iter()
-        .map(|(k, v)| format!("{k} = {v:.4}"))
-        .collect();
     let round_1 = first.map_or(String::new(), |f| {
         format!(
             "Round 1 accepted {} (it {}), which the backward check drops (below). ",
@@ -227,7 +247,7 @@ pub fn named_later(
     format!(
         "{round_1}The first cause that passes the backward check is {} ({}), accepted in round {}; {} the held-out RMS error of {axis} falls from {:.2} to {:.2} µm.",
         place(c.cause, c.column.as_deref(), c.node.as_deref()),
-        params.join(", "),
+        params_text(c.cause, &c.params),
         c.round,
         if n_named > 1 {
             "with the other named causes"
@@ -432,6 +452,38 @@ mod tests {
     use super::super::tests::{baseline, candidate, holdout};
     use super::*;
     use crate::thermal::diagnose::Cause;
+
+    /// A parameter the search stopped at its bound is stated as a bound: a source's link at its
+    /// ceiling, a lag at its floor; inside the range, or a linear term, only its value.
+    #[test]
+    fn a_parameter_at_a_bound_of_the_search_is_said_to_be_one() {
+        let p = |pairs: &[(&str, f64)]| -> BTreeMap<String, f64> {
+            pairs.iter().map(|&(k, v)| (k.to_string(), v)).collect()
+        };
+        let mut c = candidate(Cause::UnmodeledSource, 0.6, 1.0, -50.0);
+        c.parameters = p(&[("w_per_k", 200.0)]);
+        let s = named(std::slice::from_ref(&c), 0, &baseline(), "E_z");
+        assert!(
+            s.contains("(w_per_k = 200.0000, at the search's ceiling: the data ask for more than this cause may model, so the value is that bound, not an estimate)"),
+            "{s}"
+        );
+        let s = params_text(Cause::UnmodeledSource, &p(&[("w_per_k", 10.8)]));
+        assert_eq!(s, "w_per_k = 10.8000");
+        assert!(params_text(Cause::ThermalLag, &p(&[("tau_s", 30.0)])).contains("search's floor"));
+        assert!(!params_text(Cause::ThermalLag, &p(&[("tau_s", 1200.0)])).contains("search's"));
+        // a linear term has no bound to be at
+        let s = params_text(Cause::AmbientCoupling, &p(&[("um_per_k", 1e6)]));
+        assert_eq!(s, "um_per_k = 1000000.0000");
+        let s = params_text(
+            Cause::SpeedGrowth,
+            &p(&[("exponent", 3.0), ("ref", 5000.0), ("um", 1.0)]),
+        );
+        assert!(
+            s.starts_with("exponent = 3.0000, at the search's ceiling"),
+            "{s}"
+        );
+        assert!(s.ends_with("ref = 5000.0000, um = 1.0000"), "{s}");
+    }
 
     #[test]
     fn says_cuts_only_when_the_error_is_cut() {
