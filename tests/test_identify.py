@@ -1095,6 +1095,16 @@ def test_a_separate_holdout_run_trains_on_every_row_and_is_scored_from_its_first
     assert r.returncode == 0, r.stderr
     assert "E_z: training RMS" in r.stdout and f"({tmp_path / 'test.csv'}, {len(test)} rows;" in r.stdout, r.stdout
     assert Machine.load(out).to_dict()["identified"]["holdout_run"] == str(tmp_path / "test.csv")
+    # a log cut in two, on the command line: said, and held out as the tail
+    for name, sl in (("head", slice(0, k)), ("tail", slice(k, n))):
+        cols = list(c.train)
+        np.savetxt(tmp_path / f"{name}.csv", np.column_stack([np.asarray(c.train[k2])[sl] for k2 in cols]),
+                   delimiter=",", header=",".join(cols), comments="")
+    r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", "init", str(tmp_path / "head.csv"),
+                        "--holdout", str(tmp_path / "tail.csv"), "--out", str(tmp_path / "cut.toml")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "tail.csv continues " in r.stdout + r.stderr and f"(last {n - k} rows;" in r.stdout, r.stdout + r.stderr
 
 
 def test_the_file_keeps_the_fit_whose_drift_maps_predict_the_training_folds_better():

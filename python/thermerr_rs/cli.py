@@ -505,6 +505,22 @@ def cmd_predict(args: argparse.Namespace) -> int:
     return 0
 
 
+def _say_how_held_out(args: argparse.Namespace, run: Run, hold: Run | None) -> None:
+    """init's and diagnose's words for a `--holdout` run whose clock goes on from RUN's last
+    sample: the tail of one run (:meth:`Run.continues`), or a run of its own when the machine
+    does not go on through the seam."""
+    if hold is None:
+        return
+    seam = hold.seam(run)
+    if seam is not None:
+        _say(args, f"note: {hold.source}'s clock goes on from {run.source}'s last sample, but the machine does not "
+                   f"({seam}): held out as a run of its own, simulated from its first readings")
+    elif hold.continues(run):
+        _say(args, f"{hold.source} continues {run.source} (its clock starts {hold.time_s[0] - run.time_s[-1]:g} s after "
+                   f"{run.source}'s last sample): held out as the tail of one run, the model running on from "
+                   f"{run.source}'s start")
+
+
 def cmd_init(args: argparse.Namespace) -> int:
     from ._io import write_atomic
     from .thermal import Machine
@@ -512,9 +528,7 @@ def cmd_init(args: argparse.Namespace) -> int:
     _check_out(args.out, args.run, args.holdout)
     run = _read(args, args.run)
     hold = _read(args, args.holdout) if args.holdout else None
-    if hold is not None and hold.continues(run):
-        _say(args, f"{hold.source} continues {run.source} (its clock starts {hold.time_s[0] - run.time_s[-1]:g} s after "
-                   f"{run.source}'s last sample): held out as the tail of one run, simulated from {run.source}'s start")
+    _say_how_held_out(args, run, hold)
     _stage(args, f"identifying a thermal network from {run.source} ...")
     _, s = Machine.identify(run, args.axis, nodes=args.nodes, ambient=args.ambient, inputs=args.input,
                             seed=args.seed, holdout=hold)
@@ -618,14 +632,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     machine = Machine.load(args.machine)
     run = _read(args, args.run)
     hold = _read(args, args.holdout) if args.holdout else None
-    seam = hold.seam(run) if hold is not None else None
-    if hold is not None and seam is not None:
-        _say(args, f"note: {hold.source}'s clock goes on from {run.source}'s last sample, but the machine does not "
-                   f"({seam}): held out as a run of its own, simulated from its first readings")
-    if hold is not None and hold.continues(run):
-        _say(args, f"{hold.source} continues {run.source} (its clock starts {hold.time_s[0] - run.time_s[-1]:g} s after "
-                   f"{run.source}'s last sample): held out as the tail of one run, the model running on from "
-                   f"{run.source}'s start")
+    _say_how_held_out(args, run, hold)
     axes = args.axis or machine.axes
     warm = threading.Thread(target=_warm_report, name="thermerr-warm-report", daemon=True)
     warm.start()
