@@ -1126,3 +1126,29 @@ def test_the_file_keeps_the_fit_whose_drift_maps_predict_the_training_folds_bett
     assert f"the network's values are the ones {kept}" in s["toml"]
     # the same run gives the same choice
     assert Machine.identify(run)[1]["network_fit"] == f
+
+
+def test_a_holdout_with_the_training_runs_own_rows_is_refused(tmp_path):
+    """A held-out run that is the training run (its file, or a copy) would report the training
+    fit as held out: init, diagnose and fit refuse it in one line, exit 2, nothing written."""
+    c = syn.make_case("vmc", "none", 1, hours=(4, 2), dt=120.0)
+    train = tr.Run.from_frame(c.train, source="train")
+    copy = tr.Run.from_frame(c.train, source="copy")
+    with pytest.raises(DataError, match="copy holds the same rows as train"):
+        Machine.identify(train, holdout=copy)
+    with pytest.raises(DataError, match="copy holds the same rows as train"):
+        diagnose(train, Machine.from_toml(c.nominal_toml()), copy)
+    cols = list(c.train)
+    path = tmp_path / "run.csv"
+    np.savetxt(path, np.column_stack([np.asarray(c.train[k]) for k in cols]), delimiter=",",
+               header=",".join(cols), comments="")
+    (tmp_path / "m.toml").write_text(c.nominal_toml())
+    for argv in (["init", str(path), "--holdout", str(path), "--out", str(tmp_path / "o.toml")],
+                 ["diagnose", str(path), "--machine", str(tmp_path / "m.toml"), "--holdout", str(path),
+                  "--out", str(tmp_path / "d")],
+                 ["fit", str(path), "--axis", "E_z", "--model", "mlr", "--test", str(path),
+                  "--out", str(tmp_path / "o.json")]):
+        r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", *argv], capture_output=True, text=True)
+        assert r.returncode == 2, (argv, r.stderr)
+        assert "is the training run" in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.toml", "run.csv"]

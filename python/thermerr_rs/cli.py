@@ -153,6 +153,14 @@ def _check_out(out: str, *inputs: str | None) -> None:
                                 "choose another path")
 
 
+def _check_holdout(run: str, hold: str | None, flag: str) -> None:
+    """Refuse a held-out run that is the training run's own file: its "held-out" figures would be
+    the training fit's."""
+    if hold and os.path.realpath(hold) == os.path.realpath(run):
+        raise ThermerrError(f"{flag} {hold} is the training run {run}: held-out figures need rows the fit has "
+                            "not seen; give another run")
+
+
 def _sensors(args: argparse.Namespace, run: Run) -> list[str]:
     if args.sensors in (None, "all"):
         names = run.temperatures
@@ -289,6 +297,7 @@ def _one_step(args: argparse.Namespace, title: str, model: Any, run: Run, target
 
 def cmd_fit(args: argparse.Namespace) -> int:
     _check_out(args.out, args.run, args.test)
+    _check_holdout(args.run, args.test, "--test")
     run = _read(args, args.run)
     run[args.axis]
     sensors = _sensors(args, run)
@@ -526,6 +535,7 @@ def cmd_init(args: argparse.Namespace) -> int:
     from .thermal import Machine
 
     _check_out(args.out, args.run, args.holdout)
+    _check_holdout(args.run, args.holdout, "--holdout")
     run = _read(args, args.run)
     hold = _read(args, args.holdout) if args.holdout else None
     _say_how_held_out(args, run, hold)
@@ -629,6 +639,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     for given in (args.run, args.machine, args.holdout):
         if given and os.path.realpath(os.path.dirname(os.path.abspath(given))) == os.path.realpath(args.out):
             raise ThermerrError(f"--out {args.out} holds the input {given}: choose another directory")
+    _check_holdout(args.run, args.holdout, "--holdout")
     machine = Machine.load(args.machine)
     run = _read(args, args.run)
     hold = _read(args, args.holdout) if args.holdout else None
