@@ -422,7 +422,8 @@ fn ridge(cols: &[&[f64]], y: &[f64], lambda: f64) -> Result<Vec<f64>> {
 /// [`RIDGE_FOLDS`] blocked folds of those rows (each block predicted from the others). Node rises
 /// that move together let least squares trade large coefficients of opposite signs; those carry
 /// any difference between the simulated and the real temperatures (a start, another run's duty)
-/// into the axis many times over. Returns the coefficients (in [`fit_drift`]'s order) and λ.
+/// into the axis many times over. Returns the coefficients (in [`fit_drift`]'s order), λ and
+/// the folds' share ([`ridge_by_folds`]; a map with no term: 1, it predicts zero drift).
 pub fn ridge_drift(
     m: &Machine,
     d: usize,
@@ -430,10 +431,10 @@ pub fn ridge_drift(
     temps: &[f64],
     error: &Reading<'_>,
     rows: usize,
-) -> Result<(Vec<f64>, f64)> {
+) -> Result<(Vec<f64>, f64, Option<f64>)> {
     let (x, y) = kept_terms(m, d, run, temps, error, rows)?;
     if x.is_empty() {
-        return Ok((Vec::new(), 0.0));
+        return Ok((Vec::new(), 0.0, Some(1.0)));
     }
     ridge_by_folds(&x, &y)
 }
@@ -542,11 +543,15 @@ pub fn forward_penalty(x: &[Vec<f64>], y: &[f64], held_share: f64) -> Result<f64
 /// Ridge regression of `y` on the columns `x`, the penalty the one of [`RIDGE_GRID`] whose fits
 /// predict best across [`RIDGE_FOLDS`] contiguous blocks of the rows (each block from the
 /// others; the smallest on a tie); too few rows for the folds: the smallest. Returns the
-/// coefficients on every row and the penalty.
-pub fn ridge_by_folds(x: &[Vec<f64>], y: &[f64]) -> Result<(Vec<f64>, f64)> {
+/// coefficients on every row, the penalty and how well the folds predicted: their squared error
+/// over `y`'s sum of squares (0: exact; 1: no better than zero), `None` without the folds.
+pub fn ridge_by_folds(x: &[Vec<f64>], y: &[f64]) -> Result<(Vec<f64>, f64, Option<f64>)> {
     let cols: Vec<&[f64]> = x.iter().map(Vec::as_slice).collect();
-    let lambda = folds_best(&cols, y)?.map_or(RIDGE_GRID[0], |b| b.1);
-    Ok((ridge(&cols, y, lambda)?, lambda))
+    let best = folds_best(&cols, y)?;
+    let lambda = best.map_or(RIDGE_GRID[0], |b| b.1);
+    let ss = y.iter().map(|v| v * v).sum::<f64>();
+    let share = best.map(|(sse, _)| sse / ss.max(f64::MIN_POSITIVE));
+    Ok((ridge(&cols, y, lambda)?, lambda, share))
 }
 
 /// The ridge penalty of [`RIDGE_GRID`] that predicts `y` best across [`RIDGE_FOLDS`] contiguous
@@ -595,26 +600,6 @@ fn folds_best(cols: &[&[f64]], y: &[f64]) -> Result<Option<(f64, f64)>> {
         }
     }
     Ok(Some(best))
-}
-
-/// How well axis `d`'s drift map on node temperatures `temps` predicts its error across blocked
-/// folds of the first `rows` ([`folds_best`]): the folds' squared error over the error's own sum
-/// of squares (0: exact; 1: no better than zero drift); `None` with too few rows.
-pub fn drift_folds_share(
-    m: &Machine,
-    d: usize,
-    run: &RunView<'_>,
-    temps: &[f64],
-    error: &Reading<'_>,
-    rows: usize,
-) -> Result<Option<f64>> {
-    let (x, y) = kept_terms(m, d, run, temps, error, rows)?;
-    if x.is_empty() {
-        return Ok(Some(1.0)); // no term: the map predicts zero drift
-    }
-    let cols: Vec<&[f64]> = x.iter().map(Vec::as_slice).collect();
-    let ss = y.iter().map(|v| v * v).sum::<f64>();
-    Ok(folds_best(&cols, &y)?.map(|(sse, _)| sse / ss.max(f64::MIN_POSITIVE)))
 }
 
 /// Weak prior (centre, width) of a linear drift coefficient: nominal node coefficients are kept
@@ -1237,7 +1222,7 @@ mod tests {
         let (x, y) = collinear(1000);
         let cols: Vec<&[f64]> = x.iter().map(Vec::as_slice).collect();
         let ols = ridge(&cols, &y, RIDGE_GRID[0]).unwrap();
-        let (coef, lambda) = ridge_by_folds(&x, &y).unwrap();
+        let (coef, lambda, share) = ridge_by_folds(&x, &y).unwrap();
         // least squares trades the two together columns against each other
         assert!(ols[0] < -2.0 && ols[1] > 3.0, "{ols:?}");
         // the folds pick a penalty, and the pair shares the effect (about 1 in all)
@@ -1258,7 +1243,7 @@ mod tests {
             rmse_late(&ols)
         );
         // the same numbers every time
-        assert_eq!(ridge_by_folds(&x, &y).unwrap(), (coef, lambda));
+        assert_eq!(ridge_by_folds(&x, &y).unwrap(), (coef, lambda, share));
     }
 
     #[test]
@@ -1274,14 +1259,26 @@ mod tests {
         let y: Vec<f64> = (0..n)
             .map(|k| 2.0 * x[0][k] - 1.0 * x[1][k] + 0.5 * x[2][k] + 0.01 * (k as f64 * 2.3).sin())
             .collect();
-        let (coef, lambda) = ridge_by_folds(&x, &y).unwrap();
+        let (coef, lambda, share) = ridge_by_folds(&x, &y).unwrap();
         assert!(lambda <= 1e-4, "{lambda}");
         for (c, want) in coef.iter().zip([2.0, -1.0, 0.5]) {
             assert!((c - want).abs() < 0.01, "{coef:?}");
         }
+        // the folds predict all but the 0.01 wiggle: a share of y's squares of about 1e-4
+        let ss: f64 = y.iter().map(|v| v * v).sum();
+        let wiggle: f64 = (0..n)
+            .map(|k| (0.01 * (k as f64 * 2.3).sin()).powi(2))
+            .sum();
+        let share = share.unwrap();
+        assert!(
+            share > 0.5 * wiggle / ss && share < 2.0 * wiggle / ss,
+            "{share} {}",
+            wiggle / ss
+        );
         // too few rows for five folds: the smallest penalty, no folds
         let short: Vec<Vec<f64>> = x.iter().map(|c| c[..40].to_vec()).collect();
-        assert_eq!(ridge_by_folds(&short, &y[..40]).unwrap().1, RIDGE_GRID[0]);
+        let (_, lambda, share) = ridge_by_folds(&short, &y[..40]).unwrap();
+        assert_eq!((lambda, share), (RIDGE_GRID[0], None));
     }
 
     /// Two node rises that move together while the map is fitted and part later, and an error

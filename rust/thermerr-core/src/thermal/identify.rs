@@ -102,9 +102,8 @@
 use serde::Serialize;
 
 use super::calibrate::{
-    calibrate, cancelling_term, default_params, drift_folds_share, evaluate, ridge_drift,
-    sensor_drift_param, store_drift, targets, Calibration, CalibrationOptions, Reading,
-    RIDGE_FOLDS,
+    calibrate, cancelling_term, default_params, evaluate, ridge_drift, sensor_drift_param,
+    store_drift, targets, Calibration, CalibrationOptions, Reading, RIDGE_FOLDS,
 };
 use super::machine::{
     bad, Ambient, DriftSpec, FittedStart, Identified, LinkSpec, Machine, NodeSpec, SourceSpec,
@@ -2065,7 +2064,7 @@ pub fn identify(
     let mut penalties = Vec::new();
     for d in 0..machine.drift.len() {
         let e = Reading::of(&view, &machine.drift[d].axis)?;
-        let (coef, lambda) = ridge_drift(&machine, d, &view, &first, &e, m)?;
+        let (coef, lambda, _) = ridge_drift(&machine, d, &view, &first, &e, m)?;
         store_drift(&mut machine, d, &coef);
         penalties.push(format!("{} {lambda:.0e}", machine.drift[d].axis));
     }
@@ -2339,7 +2338,9 @@ fn drift_folds(mach: &Machine, view: &RunView<'_>, rows: usize) -> Result<f64> {
     let mut sum = 0.0;
     for d in 0..mach.drift.len() {
         let e = Reading::of(view, &mach.drift[d].axis)?;
-        sum += drift_folds_share(mach, d, view, &first, &e, rows)?.unwrap_or(0.0);
+        sum += ridge_drift(mach, d, view, &first, &e, rows)?
+            .2
+            .unwrap_or(0.0);
     }
     Ok(sum)
 }
