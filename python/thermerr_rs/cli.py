@@ -885,9 +885,10 @@ def build_parser() -> argparse.ArgumentParser:
                      help="an input that heats the machine, repeatable (default: every U_* column; "
                           "name the real heat inputs when the log carries others, e.g. a program number)")
     ini.add_argument("--seed", type=int, default=0, help="seed of the fuzzy c-means start (default 0)")
-    ini.add_argument("--holdout", default=None, metavar="RUN",
-                     help="a separate run to hold out (the same machine, another day): every row of RUN trains "
-                          "(default: the last 30 %% of RUN is held out)")
+    ini.add_argument("--holdout", default=None, metavar="RUN2",
+                     help="a separate run to hold out (the same machine, another day): every row of the run "
+                          "trains (default: its last 30 %% is held out); RUN2 continuing the run's clock (a log "
+                          "cut in two) is held out as its tail")
     common(ini)
     ini.set_defaults(func=cmd_init)
 
