@@ -167,32 +167,33 @@ fn error_change(axis: &str, base: &Holdout, c: &Candidate) -> String {
 }
 
 /// The sentence for the named candidate `cands[i]` (`cands` sorted by score, best first).
-/// A named cause's fitted parameters as the evidence states them, `name = value`; one that ended
-/// at a bound of the search ([`Cause::search_range`], within 0.1 %) says so: the data asked for
-/// more than the cause may model, and the value is that bound, not an estimate.
+/// A named cause's fitted parameters as the evidence states them, `name = value, ...`; then, for
+/// one that ended at a bound of the search ([`Cause::search_range`], within 0.1 %), that it did:
+/// the data asked for more than the cause may model, and the value is that bound, not an
+/// estimate.
 pub fn params_text(cause: Cause, params: &BTreeMap<String, f64>) -> String {
-    params
+    let list: Vec<String> = params
         .iter()
-        .map(|(k, &v)| {
-            let at = cause.search_range(k).and_then(|(lo, hi)| {
-                if v >= hi / 1.001 {
-                    Some("ceiling")
-                } else if v <= lo * 1.001 {
-                    Some("floor")
-                } else {
-                    None
-                }
-            });
-            match at {
-                Some(b) => format!(
-                    "{k} = {v:.4}, at the search's {b}: the data ask for more than this cause may \
-                     model, so the value is that bound, not an estimate"
-                ),
-                None => format!("{k} = {v:.4}"),
-            }
+        .map(|(k, v)| format!("{k} = {v:.4}"))
+        .collect();
+    let at_bound: Vec<String> = params
+        .iter()
+        .filter_map(|(k, &v)| {
+            let (lo, hi) = cause.search_range(k)?;
+            let bound = if v >= hi / 1.001 {
+                "ceiling"
+            } else if v <= lo * 1.001 {
+                "floor"
+            } else {
+                return None;
+            };
+            Some(format!(
+                "; {k} ended at the search's {bound}: the data ask for more than this cause may \
+                 model, so that value is the bound, not an estimate"
+            ))
         })
-        .collect::<Vec<_>>()
-        .join(", ")
+        .collect();
+    list.join(", ") + &at_bound.concat()
 }
 
 pub fn named(cands: &[Candidate], i: usize, base: &Holdout, axis: &str) -> String {
@@ -464,12 +465,13 @@ mod tests {
         c.parameters = p(&[("w_per_k", 200.0)]);
         let s = named(std::slice::from_ref(&c), 0, &baseline(), "E_z");
         assert!(
-            s.contains("(w_per_k = 200.0000, at the search's ceiling: the data ask for more than this cause may model, so the value is that bound, not an estimate)"),
+            s.contains("(w_per_k = 200.0000; w_per_k ended at the search's ceiling: the data ask for more than this cause may model, so that value is the bound, not an estimate)"),
             "{s}"
         );
         let s = params_text(Cause::UnmodeledSource, &p(&[("w_per_k", 10.8)]));
         assert_eq!(s, "w_per_k = 10.8000");
-        assert!(params_text(Cause::ThermalLag, &p(&[("tau_s", 30.0)])).contains("search's floor"));
+        assert!(params_text(Cause::ThermalLag, &p(&[("tau_s", 30.0)]))
+            .contains("tau_s ended at the search's floor"));
         assert!(!params_text(Cause::ThermalLag, &p(&[("tau_s", 1200.0)])).contains("search's"));
         // a linear term has no bound to be at
         let s = params_text(Cause::AmbientCoupling, &p(&[("um_per_k", 1e6)]));
@@ -479,10 +481,9 @@ mod tests {
             &p(&[("exponent", 3.0), ("ref", 5000.0), ("um", 1.0)]),
         );
         assert!(
-            s.starts_with("exponent = 3.0000, at the search's ceiling"),
+            s.starts_with("exponent = 3.0000, ref = 5000.0000, um = 1.0000; exponent ended at the search's ceiling"),
             "{s}"
         );
-        assert!(s.ends_with("ref = 5000.0000, um = 1.0000"), "{s}");
     }
 
     #[test]
