@@ -135,9 +135,7 @@ impl Dialect {
                 )
             })
     }
-}
 
-impl Dialect {
     /// The fields of one line of text, as a CSV reader gives them: split at the delimiter
     /// outside double quotes (a spreadsheet quotes a name holding the delimiter), each
     /// [`unquoted`]. The library's reader (the `csv` crate) does this itself; the edge's

@@ -139,12 +139,14 @@ impl Run {
         // a logger's row of units (`s, °C, µm`) or a second header under the first: the first
         // row reads no number in any data cell (the words added to its refusal)
         let units_row = |row: u64, record: &csv::StringRecord| -> String {
-            let no_number = record
-                .iter()
-                .zip(&parsed)
-                .filter(|(_, p)| **p)
-                .all(|(c, _)| dialect.number(c).is_none_or(f64::is_nan));
-            if row == 1 && no_number {
+            let no_number = || {
+                record
+                    .iter()
+                    .zip(&parsed)
+                    .filter(|(_, p)| **p)
+                    .all(|(c, _)| dialect.number(c).is_none_or(f64::is_nan))
+            };
+            if row == 1 && no_number() {
                 ", nor is any cell of the row (a row of units or a second header under the \
                  header? remove it)"
                     .to_string()
