@@ -1134,9 +1134,9 @@ def test_a_holdout_with_the_training_runs_own_rows_is_refused(tmp_path):
     c = syn.make_case("vmc", "none", 1, hours=(4, 2), dt=120.0)
     train = tr.Run.from_frame(c.train, source="train")
     copy = tr.Run.from_frame(c.train, source="copy")
-    with pytest.raises(DataError, match="copy holds the same rows as train"):
+    with pytest.raises(DataError, match="copy: rows 1-[0-9]+ are rows 1-[0-9]+ of train"):
         Machine.identify(train, holdout=copy)
-    with pytest.raises(DataError, match="copy holds the same rows as train"):
+    with pytest.raises(DataError, match="copy: rows 1-[0-9]+ are rows 1-[0-9]+ of train"):
         diagnose(train, Machine.from_toml(c.nominal_toml()), copy)
     cols = list(c.train)
     path = tmp_path / "run.csv"
@@ -1152,3 +1152,38 @@ def test_a_holdout_with_the_training_runs_own_rows_is_refused(tmp_path):
         assert r.returncode == 2, (argv, r.stderr)
         assert "is the training run" in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.toml", "run.csv"]
+
+
+def test_a_holdout_cut_from_the_training_run_is_refused(tmp_path):
+    """A held-out run cut from the training run's log (its tail, the clock kept or restarted)
+    holds rows the fit trains on: init, diagnose and fit --test refuse it in one line naming
+    both files and the rows, exit 2, before anything is fitted and with nothing written; a run
+    of its own from the same machine is not refused."""
+    c = syn.make_case("vmc", "none", 1, hours=(4, 2), dt=120.0)
+    cols = list(c.train)
+    whole = np.column_stack([np.asarray(c.train[k]) for k in cols])
+    tail = whole[60:].copy()
+    tail[:, cols.index("time_s")] -= tail[0, cols.index("time_s")]  # the clock restarted
+    paths = {}
+    for name, data in (("run", whole), ("tail", tail), ("other", np.column_stack(
+            [np.asarray(c.test[k]) for k in cols]))):
+        paths[name] = tmp_path / f"{name}.csv"
+        np.savetxt(paths[name], data, delimiter=",", header=",".join(cols), comments="")
+    train = tr.Run.from_frame(c.train, source="run")
+    piece = tr.Run.from_frame({k: tail[:, i] for i, k in enumerate(cols)}, source="tail")
+    n = len(whole)
+    with pytest.raises(DataError, match=f"^tail: rows 1-{n - 60} are rows 61-{n} of run "):
+        Machine.identify(train, holdout=piece)
+    # another run of the same machine, on the same duty: no refusal
+    tr.Run.from_frame(c.test, source="other").check_unseen(train)
+    (tmp_path / "m.toml").write_text(c.nominal_toml())
+    for argv in (["init", str(paths["run"]), "--holdout", str(paths["tail"]), "--out", str(tmp_path / "o.toml")],
+                 ["diagnose", str(paths["run"]), "--machine", str(tmp_path / "m.toml"), "--holdout",
+                  str(paths["tail"]), "--out", str(tmp_path / "d")],
+                 ["fit", str(paths["run"]), "--axis", "E_z", "--model", "mlr", "--test", str(paths["tail"]),
+                  "--out", str(tmp_path / "o.json")]):
+        r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", *argv], capture_output=True, text=True)
+        assert r.returncode == 2, (argv, r.stderr)
+        err = [line for line in r.stderr.splitlines() if line.startswith("thermerr: error:")]
+        assert len(err) == 1 and f"tail.csv: rows 1-{n - 60} are rows 61-{n} of {paths['run']}" in err[0], r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.toml", "other.csv", "run.csv", "tail.csv"]

@@ -300,6 +300,9 @@ def cmd_fit(args: argparse.Namespace) -> int:
     _check_holdout(args.run, args.test, "--test")
     run = _read(args, args.run)
     run[args.axis]
+    test_run = _read(args, args.test) if args.test else None
+    if test_run is not None:
+        test_run.check_unseen(run)
     sensors = _sensors(args, run)
     with warnings.catch_warnings(record=True) as seen:  # the fits below check the same again
         warnings.simplefilter("always", SuspectReadingWarning)
@@ -359,8 +362,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
     one = _one_step(args, "training run", model, run, args.axis, closed)
     if one is not None:
         report["train_one_step"] = one.summary()
-    if args.test:
-        test_run = _read(args, args.test)
+    if test_run is not None:
         after = None
         if args.test_continues or test_run.continues(run):
             # a piece of the training run's log: its error is relative to that run's start

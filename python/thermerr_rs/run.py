@@ -216,6 +216,17 @@ class Run:
             raise DataError(f"{self.source}: rows {start}:{stop} select nothing")
         return Run(parts)
 
+    def check_unseen(self, training: Run) -> None:
+        """Refuses this run as held-out data for a fit on ``training`` (a ``DataError``, one line
+        naming both files and the rows) when it holds a stretch of ``training``'s rows: ten or
+        more changing rows in a row that read, in every column both have, exactly as
+        ``training``'s do (a piece cut from the training log, its clock kept or restarted, or a
+        copy). Its "held-out" figures would be scored on rows the fit trains on. Two runs of one
+        machine do not read alike row for row; a piece cut out and resampled is not recognised."""
+        names = [n for n in training.names if n in self._index]
+        if names:
+            _core.check_unseen(training.source, training.matrix(names), self.source, self.matrix(names))
+
     def continues(self, before: Run) -> bool:
         """Whether this run is the continuation of ``before``, cut from the same log: its clock
         starts after ``before``'s last sample by at most :data:`CONTINUATION_STEPS` of

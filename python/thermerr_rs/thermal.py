@@ -370,13 +370,11 @@ def _joined(run: Run, holdout: Run | None) -> tuple[Run, Run | None, int | None]
     (:meth:`Run.following`) and held out from ``len(run)`` on, as the tail of one run is; the
     model runs on through the join from the training run's start. As a separate run its first
     readings would be taken for a start, and its error, relative to the log's start, would look
-    like tens of µm of drift. Anything else is returned as given; a ``holdout`` with ``run``'s
-    very rows is refused (its "held-out" figures would be the training fit's)."""
-    if holdout is not None and len(holdout) == len(run) and set(holdout.names) == set(run.names) \
-            and np.array_equal(holdout.time_s, run.time_s) \
-            and np.array_equal(holdout.matrix(list(run.names)), run.matrix(list(run.names)), equal_nan=True):
-        raise DataError(f"holdout {holdout.source} holds the same rows as {run.source}: held-out figures need "
-                        "rows the fit has not seen; give another run")
+    like tens of µm of drift. Anything else is returned as given; a ``holdout`` holding a
+    stretch of ``run``'s rows is refused (:meth:`Run.check_unseen`: its "held-out" figures would
+    be the training fit's)."""
+    if holdout is not None:
+        holdout.check_unseen(run)
     if holdout is None or not holdout.continues(run):
         return run, holdout, None
     return holdout.following(run), None, len(run)

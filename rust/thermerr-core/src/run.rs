@@ -508,6 +508,123 @@ pub fn is_data_column(name: &str) -> bool {
         .any(|p| name.starts_with(p) && name.len() > p.len())
 }
 
+/// Rows of a held-out run found among the training run's, at one offset, before it is refused
+/// ([`check_unseen`]).
+pub const SHARED_ROWS_MIN: usize = 10;
+/// A row that repeats more often than this in the training run (an idle machine's plateau on a
+/// coarse logger) places nothing: it is not looked for.
+const SHARED_ROW_REPEATS: usize = 8;
+/// Offsets walked row by row for a stretch alike, those where most changing rows matched.
+const SHARED_OFFSETS_TRIED: usize = 4;
+
+/// Refuses a held-out run that holds rows of the training run: a stretch of its consecutive
+/// rows, [`SHARED_ROWS_MIN`] or more of them differing from the row before, reads in every
+/// column both runs have exactly as a stretch of the training run's (a piece cut from the
+/// training log, its clock kept or restarted). Its "held-out" figures would be scored on rows
+/// the fit trains on, and, taken as a run of its own from its first readings, scored wrongly
+/// besides. `train` and `held` are the same columns, in one order; the time is not among them.
+/// Two runs of one machine on a coarse logger pass through the same readings, but not row after
+/// row for ten changes; a piece cut out and resampled is not recognised. One line naming the
+/// held-out file, its rows and the training run's.
+pub fn check_unseen(
+    train_source: &str,
+    train: &[&[f64]],
+    held_source: &str,
+    held: &[&[f64]],
+) -> Result<()> {
+    let (nt, nh) = (
+        train.first().map_or(0, |c| c.len()),
+        held.first().map_or(0, |c| c.len()),
+    );
+    if train.is_empty() || train.len() != held.len() || nh < SHARED_ROWS_MIN {
+        return Ok(());
+    }
+    // a row's key: its values' bits, with -0.0 as 0.0 and every NaN as one
+    let key = |cols: &[&[f64]], r: usize| -> Vec<u64> {
+        cols.iter()
+            .map(|c| match c[r] {
+                v if v.is_nan() => f64::NAN.to_bits(),
+                0.0 => 0, // and -0.0
+                v => v.to_bits(),
+            })
+            .collect()
+    };
+    let train_keys: Vec<Vec<u64>> = (0..nt).map(|r| key(train, r)).collect();
+    let held_keys: Vec<Vec<u64>> = (0..nh).map(|r| key(held, r)).collect();
+    let mut at: std::collections::HashMap<&[u64], Vec<usize>> = Default::default();
+    for (r, k) in train_keys.iter().enumerate() {
+        at.entry(k).or_default().push(r);
+    }
+    // offsets (training row - held row) at which changing rows read alike, with how many
+    let changes = |keys: &[Vec<u64>], j: usize| j == 0 || keys[j] != keys[j - 1];
+    let mut found: std::collections::HashMap<isize, usize> = Default::default();
+    for j in (0..nh).filter(|&j| changes(&held_keys, j)) {
+        if let Some(rows) = at
+            .get(held_keys[j].as_slice())
+            .filter(|r| r.len() <= SHARED_ROW_REPEATS)
+        {
+            for &i in rows {
+                *found.entry(i as isize - j as isize).or_default() += 1;
+            }
+        }
+    }
+    // the offsets where most read alike (a piece cut out reads alike at one offset nearly
+    // everywhere; a coarse logger's chance matches spread over many), best first
+    let mut offsets: Vec<(usize, isize)> = found
+        .into_iter()
+        .filter(|&(_, n)| n >= SHARED_ROWS_MIN)
+        .map(|(d, n)| (n, d))
+        .collect();
+    offsets.sort_unstable_by_key(|&(n, d)| (std::cmp::Reverse(n), d));
+    let offsets = offsets
+        .into_iter()
+        .take(SHARED_OFFSETS_TRIED)
+        .map(|(_, d)| d);
+    // at each, the longest stretch of consecutive rows alike: (changing rows, first, last, d)
+    let mut best: Option<(usize, usize, usize, isize)> = None;
+    for d in offsets {
+        let mut stretch: Option<(usize, usize)> = None; // (first row, changing rows)
+        for j in 0..nh {
+            let i = j as isize + d;
+            if i < 0 || i >= nt as isize || held_keys[j] != train_keys[i as usize] {
+                stretch = None;
+                continue;
+            }
+            let (first, n) = stretch.get_or_insert((j, 0));
+            *n += usize::from(j == *first || changes(&held_keys, j));
+            if *n >= SHARED_ROWS_MIN && best.is_none_or(|b| *n > b.0) {
+                best = Some((*n, *first, j, d));
+            }
+        }
+    }
+    let Some((_, first, end, d)) = best else {
+        return Ok(());
+    };
+    // the stretch runs on to its end
+    let end = (end..nh)
+        .take_while(|&j| {
+            let i = j as isize + d;
+            i < nt as isize && held_keys[j] == train_keys[i as usize]
+        })
+        .last()
+        .unwrap_or(end);
+    let row = |j: usize| (j as isize + d) as u64 + 1;
+    Err(Error::Parse {
+        file: held_source.to_string(),
+        line: None,
+        row: None,
+        column: None,
+        reason: format!(
+            "rows {}-{} are rows {}-{} of {train_source} (alike row for row in all {} columns both have), which the fit trains on: held-out figures need rows the fit has not seen; hold out a run of its own, or cut these rows from {train_source}",
+            first + 1,
+            end + 1,
+            row(first),
+            row(end),
+            train.len(),
+        ),
+    })
+}
+
 /// Lines of a text up to a byte offset, counted incrementally for offsets that only grow.
 #[derive(Default)]
 struct LineCount {
@@ -1017,5 +1134,82 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.starts_with("<bytes>, line 2, row 1, column `T_a`"), "{e}");
+    }
+
+    /// A day of a machine warming and cooling, three temperatures and a probe quantised as a
+    /// logger writes them (0.1 K, 0.1 µm), with noise from `seed`.
+    fn logged(seed: u64, rows: usize) -> Vec<Vec<f64>> {
+        let mut state = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        let mut noise = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((state >> 33) as f64 / (1u64 << 31) as f64 - 0.5) * 0.1
+        };
+        let q = |v: f64| (v * 10.0).round() / 10.0;
+        let mut cols = vec![Vec::new(); 4];
+        for r in 0..rows {
+            let t = r as f64 / rows as f64 * std::f64::consts::PI;
+            let warm = t.sin();
+            cols[0].push(q(20.0 + 6.0 * warm + noise()));
+            cols[1].push(q(20.0 + 3.0 * warm + noise()));
+            cols[2].push(q(20.0 + 0.5 * warm + noise()));
+            cols[3].push(q(25.0 * warm + noise()));
+        }
+        cols
+    }
+
+    fn view(cols: &[Vec<f64>], rows: std::ops::Range<usize>) -> Vec<&[f64]> {
+        cols.iter().map(|c| &c[rows.clone()]).collect()
+    }
+
+    #[test]
+    fn a_held_out_piece_of_the_training_run_is_refused() {
+        let run = logged(1, 2000);
+        let train = view(&run, 0..2000);
+        let e = check_unseen("run.csv", &train, "tail.csv", &view(&run, 1500..2000))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("tail.csv: rows 1-500 are rows 1501-2000 of run.csv ("),
+            "{e}"
+        );
+        assert!(e.contains("which the fit trains on"), "{e}");
+        // a piece that only begins inside the training rows
+        let mut more = logged(3, 2400);
+        for (m, r) in more.iter_mut().zip(&run) {
+            m[..100].copy_from_slice(&r[1900..]);
+        }
+        let e = check_unseen("run.csv", &train, "next.csv", &view(&more, 0..500))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("next.csv: rows 1-100 are rows 1901-2000 of run.csv"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn another_run_of_the_same_machine_is_not_refused() {
+        // the same duty, other noise: the states repeat, quantised to the logger's resolution,
+        // but not ten changing rows at one offset
+        let (a, b) = (logged(1, 2000), logged(2, 2000));
+        let run = view(&a, 0..2000);
+        assert!(check_unseen("run.csv", &run, "other.csv", &view(&b, 0..2000)).is_ok());
+        // an idle machine: every row alike in both
+        let idle: Vec<Vec<f64>> = (0..4).map(|c| vec![20.0 + c as f64; 500]).collect();
+        let still = view(&idle, 0..500);
+        assert!(check_unseen("idle.csv", &still, "idle2.csv", &still).is_ok());
+        // fewer changing rows than the floor, or other columns: nothing to say
+        assert!(check_unseen(
+            "run.csv",
+            &run,
+            "short.csv",
+            &view(&a, 0..SHARED_ROWS_MIN - 1)
+        )
+        .is_ok());
+        assert!(check_unseen("run.csv", &run, "few.csv", &view(&a, 0..2000)[..3]).is_ok());
     }
 }

@@ -119,6 +119,29 @@ fn probe_faults<'py>(
     ))
 }
 
+/// Refuses a held-out run holding a stretch of the training run's rows
+/// (`thermerr_core::run::check_unseen`): the same columns of each, in one order, one line
+/// naming both files and the rows, a `DataError`.
+#[pyfunction]
+fn check_unseen(
+    py: Python<'_>,
+    train_source: &str,
+    train: PyReadonlyArray2<'_, f64>,
+    held_source: &str,
+    held: PyReadonlyArray2<'_, f64>,
+) -> PyResult<()> {
+    let columns = |a: &PyReadonlyArray2<'_, f64>| -> Vec<Vec<f64>> {
+        let v = a.as_array();
+        (0..v.ncols()).map(|j| v.column(j).to_vec()).collect()
+    };
+    let (t, h) = (columns(&train), columns(&held));
+    crate::detach_short(py, || {
+        let tc: Vec<&[f64]> = t.iter().map(Vec::as_slice).collect();
+        let hc: Vec<&[f64]> = h.iter().map(Vec::as_slice).collect();
+        thermerr_core::run::check_unseen(train_source, &tc, held_source, &hc)
+    })
+}
+
 /// Predictions shaped into CNC offsets (`thermerr_core::shape`), from a fresh state: `spec` in
 /// the text form `limit=50,rate=2,deadband=0.5,unit=0.1,bits=16`.
 #[pyfunction]
@@ -173,5 +196,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(probe_faults, m)?)?;
     m.add_function(wrap_pyfunction!(scores, m)?)?;
     m.add_function(wrap_pyfunction!(shape_series, m)?)?;
+    m.add_function(wrap_pyfunction!(check_unseen, m)?)?;
     Ok(())
 }
