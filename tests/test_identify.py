@@ -1158,7 +1158,8 @@ def test_a_holdout_cut_from_the_training_run_is_refused(tmp_path):
     """A held-out run cut from the training run's log (its tail, the clock kept or restarted)
     holds rows the fit trains on: init, diagnose and fit --test refuse it in one line naming
     both files and the rows, exit 2, before anything is fitted and with nothing written; a run
-    of its own from the same machine is not refused."""
+    of its own from the same machine is not refused; nor is the piece evaluated "after" the log
+    it was cut from."""
     c = syn.make_case("vmc", "none", 1, hours=(4, 2), dt=120.0)
     cols = list(c.train)
     whole = np.column_stack([np.asarray(c.train[k]) for k in cols])
@@ -1187,3 +1188,10 @@ def test_a_holdout_cut_from_the_training_run_is_refused(tmp_path):
         err = [line for line in r.stderr.splitlines() if line.startswith("thermerr: error:")]
         assert len(err) == 1 and f"tail.csv: rows 1-{n - 60} are rows 61-{n} of {paths['run']}" in err[0], r.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.toml", "other.csv", "run.csv", "tail.csv"]
+    # a model evaluated on the piece "after" the log it was cut from: its rows would count twice
+    model = tmp_path / "model.json"
+    fit = ["fit", str(paths["run"]), "--axis", "E_z", "--model", "mlr", "--no-guard", "--out", str(model)]
+    subprocess.run([sys.executable, "-m", "thermerr_rs.cli", *fit], capture_output=True, check=True)
+    r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", "evaluate", str(model), str(paths["tail"]),
+                        "--after", str(paths["run"])], capture_output=True, text=True)
+    assert r.returncode == 2 and r.stderr.startswith(f"thermerr: error: {paths['tail']}: rows 1-"), r.stderr

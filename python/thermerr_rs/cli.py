@@ -424,6 +424,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if not target:
         raise ThermerrError(f"{args.model} does not record its target axis: pass --axis")
     after = _read(args, args.after) if args.after else None
+    if after is not None:
+        run.check_unseen(after)  # a piece that overlaps the log before it: rows counted twice
     if getattr(model, "inputs_", None) == "rise" or after is not None:
         _piece_note(args, run, after, "its rises are taken from its own first row")
     closed = model.predict_run(run, after=after)
