@@ -330,6 +330,39 @@ def test_a_semicolon_file_reads_with_delimiter_and_says_so_without(example_run1,
     assert json.loads(r.stdout) == json.loads(same.stdout)
 
 
+def test_a_loggers_own_column_names_read_with_rename_and_say_how_without(example_run1, tmp_path):
+    """A logger names its columns its own way (`Time (s)`, `Temp s01 (°C)`, `Disp z (um)`): read
+    with `--rename` (`rename=`) it is the same run to the last digit; without it the refusal
+    lists the columns and shows the option; a rename that matches nothing is refused."""
+    text = example_run1.read_text()
+    header, body = text.split("\n", 1)
+    names = header.split(",")
+    logged = [{"time_s": "Time (s)"}.get(n) or (f"Temp {n[2:]} (°C)" if n.startswith("T_") else
+              f"Disp {n[2:]} (um)" if n.startswith("E_") else f"Load {n[2:]}") for n in names]
+    assert not any(n.startswith(("T_", "E_", "U_")) for n in logged), logged
+    log = tmp_path / "log.csv"
+    log.write_text(",".join(logged) + "\n" + body)
+    renames = ["--rename", "Time (s)=time_s", "--rename", "Temp * (°C)=T_*", "--rename", "Disp * (um)=E_*",
+               "--rename", "Load *=U_*"]
+    r = _cli("select-sensors", str(log), "--axis", "E_z", "--json")
+    assert r.returncode == 2 and "no `time_s` column" in r.stderr and "--rename 'OLD=NEW'" in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    r = _cli("select-sensors", str(log), "--axis", "E_z", "--json", *renames)
+    assert r.returncode == 0, r.stderr
+    same = _cli("select-sensors", str(example_run1), "--axis", "E_z", "--json")
+    assert json.loads(r.stdout) == json.loads(same.stdout)
+    a = tr.read_run(log, rename=["Time (s)=time_s", "Temp * (°C)=T_*", "Disp * (um)=E_*", "Load *=U_*"])
+    b = tr.read_run(example_run1)
+    assert a.names == b.names and np.array_equal(a.matrix(a.names), b.matrix(b.names))
+    # the time alone renamed: no data column is named as such, and the refusal says so
+    with pytest.raises(tr.DataError, match="no column named as data: temperatures `T_\\*`"):
+        tr.read_run(log, rename=["Time (s)=time_s"])
+    r = _cli("select-sensors", str(log), "--axis", "E_z", *renames, "--rename", "Tmp * (°C)=T_*")
+    assert r.returncode == 2 and "--rename 'Tmp * (°C)=T_*' matches no column of the header" in r.stderr, r.stderr
+    r = _cli("select-sensors", str(log), "--axis", "E_z", "--rename", "Time (s)")
+    assert r.returncode == 2 and "no `=`" in r.stderr, r.stderr
+
+
 def test_a_decimal_comma_file_reads_with_decimal_and_says_how_without(example_run1, tmp_path):
     """A spreadsheet in a German or French locale writes `;` between fields and `20,5` for 20.5:
     read with `--decimal ,` (`decimal=","`) it is the same run to the last digit; without it the

@@ -72,7 +72,7 @@ def _print_json(obj: Any) -> None:
 
 
 def _read(args: argparse.Namespace, path: str) -> Run:
-    run = read_run(path, nan=args.nan, delimiter=args.delimiter, decimal=args.decimal)
+    run = read_run(path, nan=args.nan, delimiter=args.delimiter, decimal=args.decimal, rename=args.rename)
     # what --nan changed is said: a result read from mended rows is not a result of the file
     if not getattr(args, "quiet", False):
         if run.interpolated:
@@ -700,7 +700,7 @@ def cmd_fleet(args: argparse.Namespace) -> int:
     if args.scheduler is not None and args.workers is not None:
         raise ThermerrError("--workers sets the local scheduler's threads; with --scheduler the cluster has its own")
     sched = {"scheduler": args.scheduler, "workers": args.workers, "nan": args.nan, "delimiter": args.delimiter,
-             "decimal": args.decimal}
+             "decimal": args.decimal, "rename": args.rename}
     if args.fleet_command == "fit":
         sensors: Any = args.sensors if args.sensors in ("all", "auto") else [
             s.strip() for s in args.sensors.split(",") if s.strip()]
@@ -761,6 +761,11 @@ def build_parser() -> argparse.ArgumentParser:
         sp.add_argument("--decimal", choices=[".", ","], default=".",
                         help="decimal mark of the run CSVs: '.' (default) or ',' (20,5 as a "
                              "spreadsheet in a German or French locale writes it, with --delimiter ';')")
+        sp.add_argument("--rename", action="append", default=[], metavar="OLD=NEW",
+                        help="map a header name of the run CSVs to the run format's, e.g. "
+                             "'Time (s)=time_s'; a '*' in OLD stands for any text and is put back "
+                             "where NEW has one ('Temp * (°C)=T_*', 'Disp * (um)=E_*'); repeat it "
+                             "for each (the first that matches a column renames it)")
         sp.add_argument("--quiet", action="store_true", help="no progress or chatter (the results are still printed; --json prints only them)")
         sp.add_argument("--json", action="store_true", help="print results as JSON")
 

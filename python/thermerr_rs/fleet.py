@@ -240,7 +240,7 @@ def _build(model: str | Estimator, params: Mapping[str, Any], seed: int, y: Any)
 
 
 def _fit_task(path: str, axis: str, model: str | Estimator, params: Mapping[str, Any],
-              sensors: Sequence[str] | str | None, seed: int, inputs: str, reading: dict[str, str],
+              sensors: Sequence[str] | str | None, seed: int, inputs: str, reading: dict[str, Any],
               n_clusters: int, out_dir: str) -> RunResult:
     def work() -> tuple[str | None, dict[str, Any]]:
         from .metrics import scores
@@ -270,7 +270,7 @@ def _fit_task(path: str, axis: str, model: str | Estimator, params: Mapping[str,
     return _guarded(path, work)
 
 
-def _evaluate_task(path: str, model_json: str, axis: str | None, reading: dict[str, str]) -> RunResult:
+def _evaluate_task(path: str, model_json: str, axis: str | None, reading: dict[str, Any]) -> RunResult:
     def work() -> tuple[str | None, dict[str, Any]]:
         from .base import _from_text
         from .metrics import scores
@@ -296,7 +296,7 @@ def _diagnosis_figures(d: Any) -> dict[str, Any]:
 
 
 def _diagnose_task(path: str, machine_toml: str, machine_file: str, axes: list[str],
-                   holdout_fraction: float, reading: dict[str, str], out_dir: str, network: str) -> RunResult:
+                   holdout_fraction: float, reading: dict[str, Any], out_dir: str, network: str) -> RunResult:
     def work() -> tuple[str | None, dict[str, Any]]:
         from .run import read_run
         from .thermal import Machine, diagnose, diagnose_axes
@@ -457,10 +457,10 @@ def table(results: Sequence[RunResult]) -> str:
     return "\n".join(line.rstrip() for line in out)
 
 
-def _reading(nan: str, delimiter: str, decimal: str) -> dict[str, str]:
-    """How every task reads its run (:func:`~thermerr_rs.read_run`'s ``nan``, ``delimiter`` and
-    ``decimal``)."""
-    return {"nan": nan, "delimiter": delimiter, "decimal": decimal}
+def _reading(nan: str, delimiter: str, decimal: str, rename: Sequence[str]) -> dict[str, Any]:
+    """How every task reads its run (:func:`~thermerr_rs.read_run`'s ``nan``, ``delimiter``,
+    ``decimal`` and ``rename``)."""
+    return {"nan": nan, "delimiter": delimiter, "decimal": decimal, "rename": list(rename)}
 
 
 # -- the public functions --------------------------------------------------------------------
@@ -481,6 +481,7 @@ def fit_runs(
     nan: Literal["error", "drop", "interpolate"] = "error",
     delimiter: str = ",",
     decimal: str = ".",
+    rename: Sequence[str] = (),
     n_clusters: int = 4,
     scheduler: Scheduler = None,
     workers: int | None = None,
@@ -494,7 +495,7 @@ def fit_runs(
     ``"auto"`` fuzzy c-means selection per run (``n_clusters``), or the column names. ``seed``
     seeds every stochastic step of every run alike. ``inputs``: the sensors' ``"rise"`` since
     the run's start (default, as the CLI) or ``"absolute"`` readings. ``nan``, ``delimiter``,
-    ``decimal``: how each run is read, as :func:`~thermerr_rs.read_run`. ``scheduler``/``workers``:
+    ``decimal``, ``rename``: how each run is read, as :func:`~thermerr_rs.read_run`. ``scheduler``/``workers``:
     see the module's docstring.
 
     Returns one :class:`RunResult` per run, in input order; ``figures`` holds the training
@@ -506,7 +507,7 @@ def fit_runs(
         raise ThermerrError(f'inputs must be "rise" or "absolute", got {inputs!r}')
     paths = run_paths(runs)
     sens: Sequence[str] | str | None = sensors if sensors is None or isinstance(sensors, str) else list(sensors)
-    args = (axis, model, dict(params or {}), sens, int(seed), inputs, _reading(nan, delimiter, decimal),
+    args = (axis, model, dict(params or {}), sens, int(seed), inputs, _reading(nan, delimiter, decimal, rename),
             int(n_clusters), str(out_dir))
     results = _compute(_fit_task, paths, args, scheduler, workers, "fit")
     write_summary(results, out_dir)
@@ -522,6 +523,7 @@ def evaluate_runs(
     nan: Literal["error", "drop", "interpolate"] = "error",
     delimiter: str = ",",
     decimal: str = ".",
+    rename: Sequence[str] = (),
     scheduler: Scheduler = None,
     workers: int | None = None,
 ) -> list[RunResult]:
@@ -537,7 +539,7 @@ def evaluate_runs(
     model = model_or_path if isinstance(model_or_path, Estimator) else load_model(model_or_path)
     text = model.to_json()  # each task reads its own copy: no model object shared between threads
     paths = run_paths(runs)
-    results = _compute(_evaluate_task, paths, (text, axis, _reading(nan, delimiter, decimal)), scheduler, workers,
+    results = _compute(_evaluate_task, paths, (text, axis, _reading(nan, delimiter, decimal, rename)), scheduler, workers,
                        "evaluate")
     if out_dir is not None:
         write_summary(results, out_dir)
@@ -554,6 +556,7 @@ def diagnose_runs(
     nan: Literal["error", "drop", "interpolate"] = "error",
     delimiter: str = ",",
     decimal: str = ".",
+    rename: Sequence[str] = (),
     network: str = "auto",
     scheduler: Scheduler = None,
     workers: int | None = None,
@@ -600,7 +603,7 @@ def diagnose_runs(
                              f"{', '.join(m.axes) or 'no axis'}")
     # every axis: passed as none named, so that a run's dead probe is left out, not the run failed
     args = (m.to_toml(), source, [] if axis is None else axes, float(holdout_fraction),
-            _reading(nan, delimiter, decimal), str(out_dir), network)
+            _reading(nan, delimiter, decimal, rename), str(out_dir), network)
     results = _compute(_diagnose_task, paths, args, scheduler, workers, "diagnose")
     write_summary(results, out_dir)
     return results

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import warnings
+from collections.abc import Sequence
 from typing import Any, Literal
 
 import numpy as np
@@ -285,7 +286,7 @@ class Run:
 
 
 def read_run(path: str | os.PathLike[str], nan: NanPolicy = "error", *, delimiter: str = ",",
-             decimal: str = ".") -> Run:
+             decimal: str = ".", rename: Sequence[str] = ()) -> Run:
     """Read and validate a run CSV (formats.md, "Measured run").
 
     ``nan``: ``"error"`` (default) refuses a missing value, naming its row and column;
@@ -296,6 +297,10 @@ def read_run(path: str | os.PathLike[str], nan: NanPolicy = "error", *, delimite
     by name: ``"tab"``, ``"semicolon"``, ``"comma"``); a
     header that looks separated by another one says so. ``decimal``: the decimal mark, ``"."``
     (default) or ``","`` (``20,5`` for 20.5, as such a spreadsheet writes; then a point in a
-    number is refused, not read as a thousands separator).
+    number is refused, not read as a thousands separator). ``rename``: header names mapped to
+    the run format's before anything else is read, ``"OLD=NEW"`` each, the first that matches a
+    column renaming it; ``*`` in OLD stands for any text, put back where NEW has one (a logger's
+    ``Time (s)``, ``Temp t1 (°C)``, ``Disp ch1 (um)``: ``["Time (s)=time_s", "Temp * (°C)=T_*",
+    "Disp * (um)=E_*"]``). A rename that matches no column is refused, naming the columns.
     """
-    return Run(_core.read_run(os.fspath(path), nan, delimiter, decimal))
+    return Run(_core.read_run(os.fspath(path), nan, delimiter, decimal, list(rename)))

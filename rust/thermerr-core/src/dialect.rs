@@ -198,6 +198,92 @@ fn parse_cell(cell: &str) -> Option<f64> {
     cell.parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
+/// One header name mapped to the run format's (`--rename 'Temp * (°C)=T_*'`): a logger names its
+/// columns its own way (`Time (s)`, `Temp t1 (°C)`, `Disp ch1 (um)`), the run format by prefix
+/// (`time_s`, `T_`, `E_`, `U_`). `from` is a column's name, or a pattern with one `*` standing for
+/// any non-empty text; `to` is the new name, a `*` in it replaced by that text.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Rename {
+    from: String,
+    to: String,
+}
+
+impl Rename {
+    /// `OLD=NEW` as a user writes it (split at the last `=`; each side trimmed, neither empty, at
+    /// most one `*` on each, and a `*` in NEW only with one in OLD).
+    pub fn parse(text: &str) -> Result<Rename> {
+        let bad = |why: &str| {
+            Error::param(
+                "rename",
+                format!(
+                    "{text:?}: {why} (write OLD=NEW, e.g. 'Time (s)=time_s' or 'Temp * (°C)=T_*')"
+                ),
+            )
+        };
+        let (from, to) = text.rsplit_once('=').ok_or_else(|| bad("no `=`"))?;
+        let (from, to) = (from.trim(), to.trim());
+        if from.is_empty() || to.is_empty() {
+            return Err(bad("a name on each side of `=`"));
+        }
+        if from.matches('*').count() > 1 || to.matches('*').count() > 1 {
+            return Err(bad("one `*` at most on each side"));
+        }
+        if to.contains('*') && !from.contains('*') {
+            return Err(bad(
+                "a `*` in the new name stands for what the old name's `*` matched",
+            ));
+        }
+        Ok(Rename {
+            from: from.to_string(),
+            to: to.to_string(),
+        })
+    }
+
+    /// The new name of column `name`, when this rename matches it.
+    fn apply(&self, name: &str) -> Option<String> {
+        let Some((head, tail)) = self.from.split_once('*') else {
+            return (name == self.from).then(|| self.to.clone());
+        };
+        let middle = name
+            .strip_prefix(head)?
+            .strip_suffix(tail)
+            .filter(|m| !m.is_empty())?;
+        Some(self.to.replacen('*', middle, 1))
+    }
+}
+
+/// Renames header `names` of `source` in place: each column by the first of `renames` that
+/// matches it, the others as they are. A rename that matches no column is refused (a misspelt
+/// name would leave the column ignored and the run read without it), naming the file and its
+/// columns.
+pub fn rename_columns(source: &str, names: &mut [String], renames: &[Rename]) -> Result<()> {
+    let original = names.join(", ");
+    let mut used = vec![false; renames.len()];
+    for name in names.iter_mut() {
+        if let Some((k, new)) = renames
+            .iter()
+            .enumerate()
+            .find_map(|(k, r)| r.apply(name).map(|n| (k, n)))
+        {
+            used[k] = true;
+            *name = new;
+        }
+    }
+    match used.iter().position(|u| !u) {
+        None => Ok(()),
+        Some(k) => Err(Error::Parse {
+            file: source.to_string(),
+            line: Some(1),
+            row: None,
+            column: None,
+            reason: format!(
+                "--rename '{}={}' matches no column of the header (columns are: {original})",
+                renames[k].from, renames[k].to,
+            ),
+        }),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -266,5 +352,62 @@ mod tests {
         assert!(e.contains("separated by ';'"), "{e}");
         assert_eq!(d.one_column_header(&["time_s", "T_a"]), None);
         assert_eq!(d.one_column_header(&["time_s"]), None);
+    }
+
+    #[test]
+    fn a_loggers_names_are_mapped_to_the_run_format() {
+        let r = |t: &str| Rename::parse(t).unwrap();
+        let renames = [
+            r("Time (s)=time_s"),
+            r(" Temp * (°C) = T_* "),
+            r("Disp *=E_*"),
+        ];
+        let mut names: Vec<String> = [
+            "Time (s)",
+            "Temp t1 (°C)",
+            "Temp  (°C)",
+            "Disp ch1 (um)",
+            "Note",
+        ]
+        .map(String::from)
+        .to_vec();
+        rename_columns("log.csv", &mut names, &renames).unwrap();
+        // `*` stands for non-empty text; an unmatched column keeps its name
+        assert_eq!(
+            names,
+            ["time_s", "T_t1", "Temp  (°C)", "E_ch1 (um)", "Note"]
+        );
+        // the first rename that matches wins
+        let mut names = vec!["Temp t1 (°C)".to_string()];
+        rename_columns(
+            "log.csv",
+            &mut names,
+            &[r("Temp t1 (°C)=T_ambient"), r("Temp *=T_*")],
+        )
+        .unwrap_err(); // the second matches nothing now: refused
+        let mut names = vec!["Temp t1 (°C)".to_string(), "Temp t2 (°C)".to_string()];
+        rename_columns(
+            "log.csv",
+            &mut names,
+            &[r("Temp t1 (°C)=T_ambient"), r("Temp * (°C)=T_*")],
+        )
+        .unwrap();
+        assert_eq!(names, ["T_ambient", "T_t2"]);
+        // a rename that matches no column names the file and the columns as written
+        let mut names = vec!["Zeit".to_string(), "T_a".to_string()];
+        let e = rename_columns("log.csv", &mut names, &[r("Time=time_s")])
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "log.csv, line 1: --rename 'Time=time_s' matches no column of the header (columns are: Zeit, T_a)"
+        );
+        for bad in ["Time", "=time_s", "Time=", "a*b*=c", "Time=T_*"] {
+            let e = Rename::parse(bad).unwrap_err().to_string();
+            assert!(
+                e.contains("rename") && e.contains(&format!("{bad:?}")),
+                "{e}"
+            );
+        }
     }
 }

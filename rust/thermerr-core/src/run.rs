@@ -4,7 +4,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::dialect::Dialect;
+use crate::dialect::{rename_columns, Dialect, Rename};
 use crate::error::{Error, Result};
 use crate::timeaxis::{time_column, IsoClock, TimeKind, TIME_ISO, TIME_S};
 
@@ -64,16 +64,22 @@ impl Run {
     /// Reads a CSV file. Every refusal names the file, and the row/line and column where there is
     /// one.
     pub fn read_csv(path: &Path, nan: NanPolicy) -> Result<Run> {
-        Run::read_csv_with(path, nan, Dialect::default())
+        Run::read_csv_with(path, nan, Dialect::default(), &[])
     }
 
-    /// [`Run::read_csv`] with another field delimiter (`b';'`, `b'\t'`, ...) or decimal mark.
-    pub fn read_csv_with(path: &Path, nan: NanPolicy, dialect: Dialect) -> Result<Run> {
+    /// [`Run::read_csv`] with another field delimiter (`b';'`, `b'\t'`, ...) or decimal mark,
+    /// and header names mapped to the run format's ([`Rename`]; none: as written).
+    pub fn read_csv_with(
+        path: &Path,
+        nan: NanPolicy,
+        dialect: Dialect,
+        renames: &[Rename],
+    ) -> Result<Run> {
         let file = std::fs::File::open(path).map_err(|source| Error::Io {
             path: path.to_path_buf(),
             source,
         })?;
-        Run::from_csv_reader_with(file, &path.display().to_string(), nan, dialect)
+        Run::from_csv_reader_renamed(file, &path.display().to_string(), nan, dialect, renames)
     }
 
     /// Reads CSV text from any reader (a file, stdin, bytes in memory): the one parser behind
@@ -88,10 +94,22 @@ impl Run {
 
     /// [`Run::from_csv_reader`] with another field delimiter or decimal mark.
     pub fn from_csv_reader_with<R: std::io::Read>(
+        reader: R,
+        source: &str,
+        nan: NanPolicy,
+        dialect: Dialect,
+    ) -> Result<Run> {
+        Run::from_csv_reader_renamed(reader, source, nan, dialect, &[])
+    }
+
+    /// [`Run::from_csv_reader_with`], the header's names mapped by `renames` first
+    /// ([`rename_columns`]): every later check and refusal names a column by its new name.
+    pub fn from_csv_reader_renamed<R: std::io::Read>(
         mut reader: R,
         source: &str,
         nan: NanPolicy,
         dialect: Dialect,
+        renames: &[Rename],
     ) -> Result<Run> {
         let delimiter = dialect.delimiter;
         let file = source.to_string();
@@ -110,7 +128,7 @@ impl Run {
             .headers()
             .map_err(|e| csv_error(&file, bytes, e))?
             .clone();
-        let names: Vec<String> = header.iter().map(str::to_string).collect();
+        let mut names: Vec<String> = header.iter().map(str::to_string).collect();
         let named: Vec<&str> = names.iter().map(String::as_str).collect();
         if let Some(reason) = dialect.one_column_header(&named) {
             // one column whose name holds another delimiter: say so before "no time_s column"
@@ -122,6 +140,7 @@ impl Run {
                 reason,
             });
         }
+        rename_columns(&file, &mut names, renames)?;
         let time = time_column(&names);
         let parsed: Vec<bool> = names
             .iter()
@@ -274,10 +293,17 @@ impl Run {
         let Some((t_idx, kind)) = time_column(&names) else {
             return Err(whole(format!(
                 "no `{TIME_S}` column (seconds) or `{TIME_ISO}` column (ISO-8601 date-times) \
-                 (columns are: {})",
+                 (columns are: {}){RENAME_HINT}",
                 names.join(", ")
             )));
         };
+        if !names.iter().any(|n| is_data_column(n)) {
+            return Err(whole(format!(
+                "no column named as data: temperatures `T_*`, errors `E_*`, inputs `U_*` \
+                 (columns are: {}){RENAME_HINT}",
+                names.join(", ")
+            )));
+        }
         let t_name = kind.name();
         if n == 0 {
             return Err(whole("no data rows".into()));
@@ -507,6 +533,10 @@ pub fn is_data_column(name: &str) -> bool {
         .iter()
         .any(|p| name.starts_with(p) && name.len() > p.len())
 }
+
+/// What a refusal of a file's column names adds: how to map a logger's names.
+const RENAME_HINT: &str = "; map a logger's names with --rename 'OLD=NEW' (Python: \
+     read_run(..., rename=[...])), e.g. 'Time (s)=time_s' 'Temp * (°C)=T_*' 'Disp * (um)=E_*'";
 
 /// Rows of a held-out run found among the training run's, at one offset, before it is refused
 /// ([`check_unseen`]).
@@ -1211,5 +1241,46 @@ mod tests {
         )
         .is_ok());
         assert!(check_unseen("run.csv", &run, "few.csv", &view(&a, 0..2000)[..3]).is_ok());
+    }
+
+    #[test]
+    fn a_loggers_header_is_read_through_its_renames() {
+        let text = "Time (s),Temp t1 (°C),Disp ch1 (um)\n0,20.0,0.0\n15,20.5,1.5\n";
+        let renames = [
+            Rename::parse("Time (s)=time_s").unwrap(),
+            Rename::parse("Temp * (°C)=T_*").unwrap(),
+            Rename::parse("Disp * (um)=E_*").unwrap(),
+        ];
+        let r = Run::from_csv_reader_renamed(
+            text.as_bytes(),
+            "log.csv",
+            NanPolicy::Error,
+            Dialect::default(),
+            &renames,
+        )
+        .unwrap();
+        assert_eq!(r.names, ["T_t1", "E_ch1"]);
+        assert_eq!(r.column("E_ch1").unwrap(), &[0.0, 1.5]);
+        // without them: no time column, and with the time alone no data column; each says how
+        let e = Run::from_csv_reader(text.as_bytes(), "log.csv", NanPolicy::Error)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("log.csv: no `time_s` column") && e.contains("--rename 'OLD=NEW'"),
+            "{e}"
+        );
+        let e = Run::from_csv_reader_renamed(
+            text.as_bytes(),
+            "log.csv",
+            NanPolicy::Error,
+            Dialect::default(),
+            &renames[..1],
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("log.csv: no column named as data: temperatures `T_*`, errors `E_*`, inputs `U_*` (columns are: time_s, Temp t1 (°C), Disp ch1 (um)); map"),
+            "{e}"
+        );
     }
 }

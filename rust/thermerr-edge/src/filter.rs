@@ -5,7 +5,7 @@
 //! library's CSV reader reads the same file the same way); a field in double quotes is read
 //! without them, and a delimiter inside the quotes does not split it.
 
-use thermerr_core::dialect::Dialect;
+use thermerr_core::dialect::{rename_columns, Dialect, Rename};
 use thermerr_core::guard::GuardedPredictor;
 use thermerr_core::timeaxis::{time_column, IsoClock, TimeKind, TIME_S};
 
@@ -56,14 +56,32 @@ impl LineFilter {
 
     /// [`LineFilter::new`] for lines written in `dialect` (another delimiter, a decimal comma).
     pub fn with_dialect(header: &str, p: &Predictor, dialect: Dialect) -> Result<Self, String> {
-        let names: Vec<&str> = dialect.fields(
+        LineFilter::with_renames(header, p, dialect, &[])
+    }
+
+    /// [`LineFilter::with_dialect`], the header's names mapped by `renames` first
+    /// (`thermerr_core::dialect::rename_columns`, as the library's reader does; a rename that
+    /// matches no column: `line 1: --rename ... matches no column ...`).
+    pub fn with_renames(
+        header: &str,
+        p: &Predictor,
+        dialect: Dialect,
+        renames: &[Rename],
+    ) -> Result<Self, String> {
+        let fields: Vec<&str> = dialect.fields(
             header
                 .trim_start_matches('\u{feff}')
                 .trim_end_matches(['\r', '\n']),
         );
-        if let Some(e) = dialect.one_column_header(&names) {
+        if let Some(e) = dialect.one_column_header(&fields) {
             return Err(e);
         }
+        let mut owned: Vec<String> = fields.iter().map(|f| f.to_string()).collect();
+        rename_columns("", &mut owned, renames).map_err(|e| match e {
+            thermerr_core::Error::Parse { reason, .. } => format!("line 1: {reason}"),
+            e => e.to_string(),
+        })?;
+        let names: Vec<&str> = owned.iter().map(String::as_str).collect();
         let wanted = p
             .features()
             .ok_or("the model does not record its feature columns (fit it on a run)")?;

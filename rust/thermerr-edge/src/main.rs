@@ -26,19 +26,21 @@
 //! do (`thermerr_core::dialect`): `--delimiter ';' --decimal ,` for a spreadsheet or logger in
 //! a German or French locale (`20,5`), `--delimiter tab`. `--reference` is read the same way.
 //! The output is always `,` between fields and decimal points (a time written with a decimal
-//! comma is written as its number).
+//! comma is written as its number). `--rename OLD=NEW` (repeated) maps a logger's header names
+//! to the model's, as the library's readers do (`thermerr_core::dialect::Rename`: `Time (s)=time_s`,
+//! `Temp * (°C)=T_*`, a `*` standing for any text); `--reference` is read with them too.
 
 use std::io::{BufRead, BufReader, Write};
 use std::process::ExitCode;
 
-use thermerr_core::dialect::Dialect;
+use thermerr_core::dialect::{Dialect, Rename};
 use thermerr_core::shape::{Shaper, Shaping};
 use thermerr_edge::filter::{Guarded, LineFilter};
 use thermerr_edge::Predictor;
 
 const USAGE: &str =
     "usage: thermerr-edge MODEL.json [RUN.csv] [--shape SPEC] [--no-guard] [--bench-latency N]
-                     [--reference RUN.csv] [--delimiter D] [--decimal M]
+                     [--reference RUN.csv] [--delimiter D] [--decimal M] [--rename OLD=NEW ...]
   Reads CSV rows (header first) from RUN.csv or stdin, writes time_s,<target>_pred per row.
   A model fitted with a sensor-fault guard adds a status column (ok, held:T_x, fallback:T_x,
   frozen:T_x, joined by ;): missing, out-of-range, too fast or stuck readings are held, then
@@ -48,7 +50,22 @@ const USAGE: &str =
   --reference RUN.csv takes the rises from RUN.csv's first data row (e.g. the training run's start,
   where the error is zero) instead of the stream's first row: a gateway started mid-run.
   --delimiter ';' (or tab, comma, semicolon) and --decimal , read a run written with that field
-  separator and decimal mark (20,5); the output is always , and decimal points.";
+  separator and decimal mark (20,5); the output is always , and decimal points.
+  --rename 'Time (s)=time_s' --rename 'Temp * (°C)=T_*' maps a logger's header names to the
+  model's (a * stands for any text and is put back where the new name has one).";
+
+/// How the run is written: its dialect and the renames of its header's names.
+struct Written {
+    dialect: Dialect,
+    renames: Vec<Rename>,
+}
+
+impl Written {
+    /// The line filter of a header written this way.
+    fn filter(&self, header: &str, p: &Predictor) -> Result<LineFilter, String> {
+        LineFilter::with_renames(header, p, self.dialect, &self.renames)
+    }
+}
 
 fn fail(msg: impl std::fmt::Display) -> ExitCode {
     eprintln!("thermerr-edge: error: {msg}");
@@ -57,7 +74,7 @@ fn fail(msg: impl std::fmt::Display) -> ExitCode {
 
 /// The model's readings in the first data row of the run file at `path`, picked by name as the
 /// stream's are: the rise reference of `--reference`.
-fn reference_row(path: &str, p: &Predictor, dialect: Dialect) -> Result<Vec<f64>, String> {
+fn reference_row(path: &str, p: &Predictor, written: &Written) -> Result<Vec<f64>, String> {
     let f = std::fs::File::open(path).map_err(|e| format!("--reference {path}: {e}"))?;
     let mut lines = BufReader::new(f).lines();
     let header = match lines.next() {
@@ -65,7 +82,8 @@ fn reference_row(path: &str, p: &Predictor, dialect: Dialect) -> Result<Vec<f64>
         Some(Err(e)) => return Err(format!("--reference {path}: {e}")),
         None => return Err(format!("--reference {path}: the file is empty")),
     };
-    let mut filter = LineFilter::with_dialect(&header, p, dialect)
+    let mut filter = written
+        .filter(&header, p)
         .map_err(|e| format!("--reference {path}: {e}"))?;
     match lines.next() {
         Some(Ok(line)) => filter
@@ -84,7 +102,7 @@ fn run(
     mut shaper: Option<Shaper>,
     use_guard: bool,
     reference: Option<Vec<f64>>,
-    dialect: Dialect,
+    written: &Written,
 ) -> ExitCode {
     if let Some(x) = &reference {
         if let Err(e) = p.set_reference(x) {
@@ -97,7 +115,7 @@ fn run(
         Some(Err(e)) => return fail(format!("cannot read the header: {e}")),
         None => return fail("the input is empty (a header row is expected)"),
     };
-    let mut filter = match LineFilter::with_dialect(&header, p, dialect) {
+    let mut filter = match written.filter(&header, p) {
         Ok(f) => f,
         Err(e) => return fail(e),
     };
@@ -287,6 +305,16 @@ fn main() -> ExitCode {
         Ok(d) => d,
         Err(e) => return fail(e),
     };
+    let mut renames = Vec::new();
+    while let Some(k) = args.iter().position(|a| a == "--rename") {
+        match args.get(k + 1).map(|v| Rename::parse(v)) {
+            Some(Ok(r)) => renames.push(r),
+            Some(Err(e)) => return fail(e),
+            None => return fail("--rename takes OLD=NEW, e.g. --rename 'Temp * (°C)=T_*'"),
+        }
+        args.drain(k..k + 2);
+    }
+    let written = Written { dialect, renames };
     let use_guard = match args.iter().position(|a| a == "--no-guard") {
         Some(k) => {
             args.remove(k);
@@ -315,11 +343,11 @@ fn main() -> ExitCode {
     };
     let reference = match reference_path
         .as_deref()
-        .map(|path| reference_row(path, &p, dialect))
+        .map(|path| reference_row(path, &p, &written))
     {
         None => None,
         Some(Ok(x)) => Some(x),
         Some(Err(e)) => return fail(e),
     };
-    run(&mut p, input, bench, shaper, use_guard, reference, dialect)
+    run(&mut p, input, bench, shaper, use_guard, reference, &written)
 }

@@ -258,6 +258,74 @@ fn binary_reads_a_decimal_comma_when_told_and_says_so_when_not() {
     let _ = std::fs::remove_file(&b);
 }
 
+/// A logger's own header names (`Time (s)`, `Temp s01 (°C)`) mapped by `--rename` give the
+/// output of the run format's names to the byte, the reference read the same way; a rename that
+/// matches no column, or one written without `=`, is refused in one line, exit 2.
+#[test]
+fn binary_maps_a_loggers_header_by_rename() {
+    let (names, rows) = run();
+    let logger: Vec<String> = names
+        .iter()
+        .map(|n| match n.strip_prefix("T_") {
+            Some(s) => format!("Temp {s} (°C)"),
+            None if n == "time_s" => "Time (s)".to_string(),
+            None => n.to_string(),
+        })
+        .collect();
+    let body: String = rows
+        .iter()
+        .take(6)
+        .map(|r| r.iter().map(f64::to_string).collect::<Vec<_>>().join(",") + "\n")
+        .collect();
+    let dir = std::env::temp_dir();
+    let (a, b) = (
+        dir.join(format!("edge_named_{}.csv", std::process::id())),
+        dir.join(format!("edge_logger_{}.csv", std::process::id())),
+    );
+    std::fs::write(&a, names.join(",") + "\n" + &body).unwrap();
+    std::fs::write(&b, logger.join(",") + "\n" + &body).unwrap();
+    let model = fixtures().join("mlr_rise.json");
+    let edge = |args: &[&str]| Command::new(exe()).arg(&model).args(args).output().unwrap();
+    let want = edge(&[a.to_str().unwrap()]);
+    assert!(want.status.success());
+    let renames = ["--rename", "Time (s)=time_s", "--rename", "Temp * (°C)=T_*"];
+    let got = edge(&[&[b.to_str().unwrap()][..], &renames].concat());
+    assert!(
+        got.status.success(),
+        "{}",
+        String::from_utf8_lossy(&got.stderr)
+    );
+    assert_eq!(got.stdout, want.stdout);
+    let with_ref = edge(
+        &[
+            &[b.to_str().unwrap(), "--reference", b.to_str().unwrap()][..],
+            &renames,
+        ]
+        .concat(),
+    );
+    assert!(
+        with_ref.status.success(),
+        "{}",
+        String::from_utf8_lossy(&with_ref.stderr)
+    );
+    // without the renames the model's columns are missing; a misspelt one, or no `=`: refused
+    let e = edge(&[b.to_str().unwrap()]);
+    assert_eq!(e.status.code(), Some(2));
+    let e = edge(&[b.to_str().unwrap(), "--rename", "Tmp * (°C)=T_*"]);
+    assert_eq!(e.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&e.stderr);
+    assert!(
+        err.starts_with("thermerr-edge: error: line 1: --rename 'Tmp * (°C)=T_*' matches no column of the header (columns are: Time (s), U_spindle_rpm, Temp s01 (°C), ")
+            && err.lines().count() == 1,
+        "{err}"
+    );
+    let e = edge(&[b.to_str().unwrap(), "--rename", "Time (s)"]);
+    assert_eq!(e.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&e.stderr).contains("no `=`"));
+    let _ = std::fs::remove_file(&a);
+    let _ = std::fs::remove_file(&b);
+}
+
 /// A logger or spreadsheet that quotes its header, or every field (`"T_s01"`, `"20.5"`), is read
 /// as the library reads it: the same output as the plain file. Before, the quoted header was
 /// "the input has no column T_s01, ..." and nothing was predicted. A delimiter inside quotes does

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use numpy::{PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use thermerr_core::dialect::Dialect;
+use thermerr_core::dialect::{Dialect, Rename};
 use thermerr_core::metrics;
 use thermerr_core::run::{NanPolicy, Run};
 
@@ -30,19 +30,26 @@ fn run_to_dict<'py>(py: Python<'py>, run: Run) -> PyResult<Bound<'py, PyDict>> {
     Ok(d)
 }
 
-/// Reads and validates a run CSV; returns its pieces as a dict (the Python `Run` wraps it).
+/// Reads and validates a run CSV, its header's names mapped by `rename` (`OLD=NEW` each,
+/// `thermerr_core::dialect::Rename`); returns its pieces as a dict (the Python `Run` wraps it).
 #[pyfunction]
-#[pyo3(signature = (path, nan = "error", delimiter = ",", decimal = "."))]
+#[pyo3(signature = (path, nan = "error", delimiter = ",", decimal = ".", rename = Vec::new()))]
 fn read_run<'py>(
     py: Python<'py>,
     path: PathBuf,
     nan: &str,
     delimiter: &str,
     decimal: &str,
+    rename: Vec<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let policy: NanPolicy = nan.parse().map_err(PyErrWrap)?;
     let d = Dialect::new(delimiter, decimal).map_err(PyErrWrap)?;
-    let run = crate::detach(py, || Run::read_csv_with(&path, policy, d))?;
+    let renames = rename
+        .iter()
+        .map(|r| Rename::parse(r))
+        .collect::<thermerr_core::Result<Vec<_>>>()
+        .map_err(PyErrWrap)?;
+    let run = crate::detach(py, || Run::read_csv_with(&path, policy, d, &renames))?;
     run_to_dict(py, run)
 }
 
