@@ -456,7 +456,7 @@ def cmd_select(args: argparse.Namespace) -> int:
     return 0
 
 
-def _iso_stamps(path: str, delimiter: str, run: Run) -> list[str] | None:
+def _iso_stamps(path: str, delimiter: str, run: Run, rename: list[str]) -> list[str] | None:
     """A run file's ISO-8601 ``time`` cells as written, for the rows ``run`` kept (None when the
     file has a ``time_s`` column or no ``time``): what ``thermerr predict`` echoes, as
     ``thermerr-edge`` does, instead of seconds since the first row."""
@@ -464,7 +464,7 @@ def _iso_stamps(path: str, delimiter: str, run: Run) -> list[str] | None:
 
     with open(path, newline="", encoding="utf-8-sig") as f:
         rows = csv.reader(f, delimiter=delimiter)
-        header = [h.strip() for h in next(rows, [])]
+        header = _core.renamed_header(path, [h.strip() for h in next(rows, [])], rename)
         if "time_s" in header or "time" not in header:
             return None
         k = header.index("time")
@@ -502,7 +502,7 @@ def cmd_predict(args: argparse.Namespace) -> int:
                    "each node starts from this run's first reading plus that run's offset")
     sim = machine.simulate(run, fit_initial=args.fit_initial, after=after,
                            initial_k="fitted" if args.start == "fitted" else None)
-    stamps = _iso_stamps(args.run, args.delimiter, run)
+    stamps = _iso_stamps(args.run, args.delimiter, run, args.rename)
     cols: dict[str, Any] = {"time": stamps} if stamps is not None else {"time_s": run.time_s}
     cols.update({f"{a}_pred": v for a, v in sim.drift.items()})
     cols.update({f"{c}_pred": v for c, v in sim.sensors.items()})

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use numpy::{PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use thermerr_core::dialect::{Dialect, Rename};
+use thermerr_core::dialect::{rename_columns, Dialect, Rename};
 use thermerr_core::metrics;
 use thermerr_core::run::{NanPolicy, Run};
 
@@ -44,13 +44,23 @@ fn read_run<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let policy: NanPolicy = nan.parse().map_err(PyErrWrap)?;
     let d = Dialect::new(delimiter, decimal).map_err(PyErrWrap)?;
-    let renames = rename
-        .iter()
-        .map(|r| Rename::parse(r))
-        .collect::<thermerr_core::Result<Vec<_>>>()
-        .map_err(PyErrWrap)?;
+    let renames = parse_renames(&rename)?;
     let run = crate::detach(py, || Run::read_csv_with(&path, policy, d, &renames))?;
     run_to_dict(py, run)
+}
+
+fn parse_renames(rename: &[String]) -> PyResult<Vec<Rename>> {
+    let r: thermerr_core::Result<Vec<Rename>> = rename.iter().map(|r| Rename::parse(r)).collect();
+    Ok(r.map_err(PyErrWrap)?)
+}
+
+/// A header's names of `source` as `read_run(..., rename=)` reads them
+/// (`thermerr_core::dialect::rename_columns`).
+#[pyfunction]
+fn renamed_header(source: &str, names: Vec<String>, rename: Vec<String>) -> PyResult<Vec<String>> {
+    let mut names = names;
+    rename_columns(source, &mut names, &parse_renames(&rename)?).map_err(PyErrWrap)?;
+    Ok(names)
 }
 
 /// Validates in-memory columns (`data` is n × len(names), with `time_s` among the names, or
@@ -204,5 +214,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scores, m)?)?;
     m.add_function(wrap_pyfunction!(shape_series, m)?)?;
     m.add_function(wrap_pyfunction!(check_unseen, m)?)?;
+    m.add_function(wrap_pyfunction!(renamed_header, m)?)?;
     Ok(())
 }
