@@ -198,7 +198,7 @@ def test_a_second_run_on_a_clock_that_ran_on_is_its_own_run(tmp_path, capsys):
     assert tail.continues(head) and tail.seam(head) is None
     t = np.asarray(c.train["time_s"])
     later = {key: (t[:60] + t[-1] + (t[1] - t[0])) if key == "time_s" else np.asarray(v)[:60]
-             for key, v in c.train.items()}
+             for key, v in c.test.items()}  # the test run's rows: the training run's would be refused
     second = tr.Run.from_frame(later, source="b.csv")
     assert not second.continues(run)
     why = second.seam(run)

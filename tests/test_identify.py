@@ -618,8 +618,11 @@ def test_two_runs_joined_in_one_file_are_refused_naming_the_row(tmp_path, capsys
     nominal = Machine.from_toml(c.nominal_toml())
     with pytest.raises(DataError, match=rf"joined\.csv, row {n + 1}: "):
         diagnose(joined, nominal)
-    with pytest.raises(DataError, match=rf"joined\.csv, row {n + 1}: "):
-        diagnose(_run(c.train, "train.csv"), nominal, joined)
+    # held out: the test run joined to itself (the training run's rows in it would be refused
+    # first, as rows the fit trains on)
+    m = len(c.test["time_s"])
+    with pytest.raises(DataError, match=rf"joined\.csv, row {m + 1}: "):
+        diagnose(_run(c.train, "train.csv"), nominal, _run(_joined(c.test), "joined.csv"))
     with pytest.raises(DataError, match=rf"joined\.csv, row {n + 1}: "):
         nominal.calibrate(joined)
     with pytest.raises(DataError, match=rf"joined\.csv, row {n + 1}: "):
