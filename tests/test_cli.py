@@ -132,7 +132,8 @@ def test_a_warning_is_one_line(example_run1, tmp_path):
                         "--out", str(tmp_path / "m.json"), "--quiet"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert r.stderr.splitlines() == [
-        f"thermerr: warning: {p}: ignoring columns without a T_/E_/U_ prefix: comment"], r.stderr
+        f"thermerr: warning: {p}: ignoring columns without a T_/E_/U_ prefix: comment (a sensor among them "
+        "is read when named so: --rename 'OLD=NEW', read_run(rename=))"], r.stderr
 
 
 def test_console_script_runs(example_run1, tmp_path):

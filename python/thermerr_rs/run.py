@@ -78,7 +78,8 @@ class Run:
         self._index = {n: k for k, n in enumerate(self.names)}
         if self.ignored:
             warnings.warn(
-                f"{self.source}: ignoring columns without a T_/E_/U_ prefix: {', '.join(self.ignored)}",
+                f"{self.source}: ignoring columns without a T_/E_/U_ prefix: {', '.join(self.ignored)} "
+                "(a sensor among them is read when named so: --rename 'OLD=NEW', read_run(rename=))",
                 UserWarning,
                 stacklevel=3,
             )
