@@ -97,7 +97,8 @@
 //!    every axis's map is fitted last to the temperatures the rounded network simulates from
 //!    there, by ridge regression with its penalty chosen on blocked folds of the training rows
 //!    ([`ridge_drift`]); the file's figures and `[start]` (zero offsets) are from the first
-//!    readings. A note names an axis held out worse than no compensation at all.
+//!    readings. A note names an axis held out worse than no compensation at all, and a
+//!    separate held-out run's probes that start away from zero ([`START_AWAY_SHARE`]).
 
 use serde::Serialize;
 
@@ -1119,6 +1120,11 @@ fn cluster(
 }
 
 /// Identifies a starting network from a run (module docs).
+/// A separate held-out run's probe whose first reading is further from zero than this share of
+/// what it moves over that run (and than the `none` bar of its noise) is said to start away from
+/// zero (a note of step 7).
+pub const START_AWAY_SHARE: f64 = 0.1;
+
 pub fn identify(
     run: &Run,
     holdout: Option<&Run>,
@@ -2152,6 +2158,37 @@ pub fn identify(
             })
         })
         .collect();
+    // a separate held-out run whose probes start away from zero: the file predicts the drift
+    // from a run's start, so the start's reading counts against it on every held-out row
+    if let Some(h) = &hview {
+        let mut away = Vec::new();
+        for a in &axes {
+            let eh = Reading::of(h, &a.axis)?;
+            let read: Vec<f64> = eh.kept(&eh.values, 0..h.len());
+            let Some(&first) = read.first() else {
+                continue;
+            };
+            let span = read.iter().fold(f64::NEG_INFINITY, |x, &v| x.max(v))
+                - read.iter().fold(f64::INFINITY, |x, &v| x.min(v));
+            if first.abs() > (ratio * a.noise_um).max(START_AWAY_SHARE * span) {
+                away.push(format!(
+                    "{} at {first:.2} µm (it moves {span:.1} µm)",
+                    a.axis
+                ));
+            }
+        }
+        if !away.is_empty() {
+            notes.push(format!(
+                "{}'s probes start away from zero: {}. The file predicts a run's drift from its \
+                 start, where it is 0, so that reading counts against it on every held-out row: \
+                 a log cut in two is held out as its tail when its clock goes on from the \
+                 training run's (`time_s` kept), and a run of its own is read with its probes \
+                 zeroed at its start",
+                h.source,
+                away.join(", ")
+            ));
+        }
+    }
     if !worse.is_empty() {
         notes.push(format!(
             "held out, the file predicts {} worse than no compensation at all (the drift from the \
