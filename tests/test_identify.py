@@ -1160,18 +1160,20 @@ def test_a_holdout_with_the_training_runs_own_rows_is_refused(tmp_path):
 def test_a_held_out_run_whose_probes_start_away_from_zero_is_said():
     """A separate held-out run is predicted from its start, where the drift is 0: a run whose
     probe reads 20 µm there (a log cut in two with its clock restarted, a probe not zeroed)
-    counts that against the file on every row, and a note says so, naming the axis and the
-    reading; a run of its own, zeroed at its start, draws no such note."""
+    counts that against the file on every row, and a suspect reading of kind `start` says so,
+    naming the axis and the reading; a run of its own, zeroed at its start, draws none."""
     c = syn.make_case("vmc", "none", 1, hours=(4, 2), dt=120.0)
     train = tr.Run.from_frame(c.train, source="train")
     _, s = Machine.identify(train, holdout=tr.Run.from_frame(c.test, source="test"))
-    assert not any("start away from zero" in n for n in s["notes"]), s["notes"]
+    assert not any(sp["kind"] == "start" for sp in s["suspect_readings"]), s["suspect_readings"]
     shifted = {k: (np.asarray(v) + 20.0 if k == "E_z" else v) for k, v in c.test.items()}
-    _, s = Machine.identify(train, holdout=tr.Run.from_frame(shifted, source="warm"))
-    note = [n for n in s["notes"] if "start away from zero" in n]
-    head = "warm's probes start away from zero: E_z at "
-    assert len(note) == 1 and note[0].startswith(head), s["notes"]
-    assert abs(float(note[0][len(head):].split()[0]) - 20.0) < 0.5, note  # 20 µm and the first reading's noise
+    with pytest.warns(SuspectReadingWarning, match="warm: E_z reads"):
+        _, s = Machine.identify(train, holdout=tr.Run.from_frame(shifted, source="warm"))
+    start = [sp for sp in s["suspect_readings"] if sp["kind"] == "start"]
+    assert [(sp["column"], sp["row"]) for sp in start] == [("E_z", 1)], s["suspect_readings"]
+    assert abs(start[0]["size"] - 20.0) < 0.5, start  # 20 µm and the first reading's noise
+    note = [n for n in s["notes"] if "start" in n and n.startswith("suspect reading: warm: E_z reads ")]
+    assert len(note) == 1 and "a run's drift is predicted from its start, where it is 0" in note[0], s["notes"]
 
 
 def test_a_holdout_cut_from_the_training_run_is_refused(tmp_path):

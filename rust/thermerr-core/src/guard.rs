@@ -877,18 +877,23 @@ pub fn one_run(source: &str, names: &[&str], cols: &[&[f64]], time: &[f64]) -> R
 /// from the run's start is about zero there, so this one is a raw reading (a capacitive probe's
 /// gap) and the error is taken from that reading.
 pub fn probe_offset(col: &[f64], failing: &[std::ops::Range<usize>]) -> Option<f64> {
+    let (_, start, span) = probe_start(col, failing)?;
+    (start.abs() > span).then_some(start)
+}
+
+/// A probe's first right reading (not in `failing`): its row, the reading, and what the right
+/// readings span (largest less smallest). The start is the first right reading, its noise and
+/// all: the mean of the first five readings, tried, took in the drift of the run's first
+/// minutes instead (2 µm on the simulated VMC at 120 s per reading, against 0.2 µm of noise).
+fn probe_start(col: &[f64], failing: &[std::ops::Range<usize>]) -> Option<(usize, f64, f64)> {
     let right = || {
         col.iter()
             .enumerate()
             .filter(|(k, v)| v.is_finite() && !failing.iter().any(|r| r.contains(k)))
-            .map(|(_, v)| *v)
     };
-    // the start is the first right reading, its noise and all: the mean of the first five
-    // readings, tried, took in the drift of the run's first minutes instead (2 µm on the
-    // simulated VMC at 120 s per reading, against 0.2 µm of noise)
-    let start = right().next()?;
-    let (lo, hi) = crate::metrics::min_max(right());
-    (start.abs() > hi - lo).then_some(start)
+    let (row, &start) = right().next()?;
+    let (lo, hi) = crate::metrics::min_max(right().map(|(_, v)| *v));
+    Some((row, start, hi - lo))
 }
 
 /// What makes a reading suspect.
@@ -916,7 +921,21 @@ pub enum SuspectKind {
     /// range): error columns are in µm (formats.md) and a machine's thermal drift is microns to
     /// tens of microns, so a probe logged in mm (hundredths) looks like this. Said, not changed.
     Scale,
+    /// A probe whose first right reading is away from zero ([`START_AWAY_SHARE`] of what it
+    /// moves, [`START_AWAY_FLOOR_UM`] or more) but within its movement (not an [`Offset`]): a
+    /// run's drift is predicted from its start, where it is 0, so the reading counts against
+    /// every model of the run on every row (`size`: that reading, µm). A piece cut from a longer
+    /// log with its clock restarted, or a probe not zeroed at the start. Said, not changed.
+    ///
+    /// [`Offset`]: SuspectKind::Offset
+    Start,
 }
+
+/// A probe's first right reading further from zero than this share of what it moves over the
+/// run is said ([`SuspectKind::Start`]) ...
+pub const START_AWAY_SHARE: f64 = 0.1;
+/// ... when it is also this far from zero (µm): several times a probe's noise (0.15-0.3 µm).
+pub const START_AWAY_FLOOR_UM: f64 = 2.0;
 
 /// A probe whose whole range over the run is below this (µm), but not zero, is said to be in
 /// the wrong unit ([`SuspectKind::Scale`]): less than a probe's own noise (0.15-0.3 µm on the
@@ -1130,6 +1149,22 @@ pub fn suspect_readings(
                     text: format!(
                         "{source}: {name} moves by {:.4} over the whole run: error columns are in µm (formats.md), and a machine's thermal drift is microns to tens of microns; a probe logged in mm moves by hundredths. If so, multiply the column by 1000; the run is used as read",
                         hi - lo
+                    ),
+                });
+            }
+            if let Some((k, v, span)) = probe_start(col, &failing).filter(|&(_, v, span)| {
+                v.abs() <= span && v.abs() > (START_AWAY_SHARE * span).max(START_AWAY_FLOOR_UM)
+            }) {
+                out.push(Suspect {
+                    column: name.to_string(),
+                    kind: SuspectKind::Start,
+                    row: k + 1,
+                    count: 1,
+                    size: v,
+                    text: format!(
+                        "{source}: {name} reads {v:.2} µm at its first right reading, {:.0} % of what it moves over the run ({:.1} µm): a run's drift is predicted from its start, where it is 0, so that reading counts against every model of the run on every row. A piece cut from a longer log (kept with its clock going on, it is held out as the log's tail), or a probe not zeroed at the start? The run is used as read",
+                        100.0 * v.abs() / span,
+                        span
                     ),
                 });
             }

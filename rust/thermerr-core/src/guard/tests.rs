@@ -627,6 +627,38 @@ fn a_probe_that_does_not_start_at_zero_is_taken_from_its_first_reading() {
 }
 
 #[test]
+fn a_probe_that_starts_away_from_zero_within_its_movement_is_said() {
+    // the drift from some earlier start: 29.5 µm over the run, 4 µm at this run's first row
+    let (t, y) = warming(960);
+    let e: Vec<f64> = y.iter().map(|v| 6.0 * (v - y[0]) + 4.0).collect();
+    let s = suspect_readings("piece.csv", &["E_a"], &[&e], &t);
+    assert_eq!(s.len(), 1, "{s:?}");
+    assert_eq!(
+        (s[0].kind, s[0].row, s[0].size),
+        (SuspectKind::Start, 1, 4.0)
+    );
+    assert!(!s[0].fails());
+    assert!(
+        s[0].text.starts_with("piece.csv: E_a reads 4.00 µm at its first right reading, 14 % of what it moves over the run (29.5 µm): a run's drift is predicted from its start, where it is 0"),
+        "{}",
+        s[0].text
+    );
+    // within the floor (a probe's noise at its zero) or a tenth of its movement: nothing said;
+    // beyond its movement it is an offset, taken from its first reading, not this
+    for (start, said) in [
+        (1.9, None),
+        (2.5, None),
+        (3.5, Some(SuspectKind::Start)),
+        (40.0, Some(SuspectKind::Offset)),
+    ] {
+        let e: Vec<f64> = y.iter().map(|v| 6.0 * (v - y[0]) + start).collect();
+        let s = suspect_readings("piece.csv", &["E_a"], &[&e], &t);
+        assert_eq!(s.first().map(|s| s.kind), said, "{start}: {s:?}");
+        assert!(s.len() <= 1, "{s:?}");
+    }
+}
+
+#[test]
 fn a_probe_that_moves_by_less_than_a_micron_is_said_to_be_in_another_unit() {
     let (t, y) = warming(960);
     // the same drift from the run's start, in µm (moves 5 µm) and in mm (moves 0.005)

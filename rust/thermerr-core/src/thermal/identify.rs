@@ -97,8 +97,7 @@
 //!    every axis's map is fitted last to the temperatures the rounded network simulates from
 //!    there, by ridge regression with its penalty chosen on blocked folds of the training rows
 //!    ([`ridge_drift`]); the file's figures and `[start]` (zero offsets) are from the first
-//!    readings. A note names an axis held out worse than no compensation at all, and a
-//!    separate held-out run's probes that start away from zero ([`START_AWAY_SHARE`]).
+//!    readings. A note names an axis held out worse than no compensation at all.
 
 use serde::Serialize;
 
@@ -281,7 +280,8 @@ pub struct Identification {
     /// members of that node, not nodes of their own.
     pub copies: Vec<LaggedCopy>,
     pub notes: Vec<String>,
-    /// Readings the run itself makes suspect (said in `notes` as well, not changed).
+    /// Readings the run itself makes suspect, and a separate held-out run's after them (said in
+    /// `notes` as well, not changed).
     pub suspect_readings: Vec<crate::guard::Suspect>,
     pub calibration_iterations: usize,
     pub calibration_converged: bool,
@@ -1120,11 +1120,6 @@ fn cluster(
 }
 
 /// Identifies a starting network from a run (module docs).
-/// A separate held-out run's probe whose first reading is further from zero than this share of
-/// what it moves over that run (and than the `none` bar of its noise) is said to start away from
-/// zero (a note of step 7).
-pub const START_AWAY_SHARE: f64 = 0.1;
-
 pub fn identify(
     run: &Run,
     holdout: Option<&Run>,
@@ -1212,9 +1207,24 @@ pub fn identify(
             ck.inputs.join(", ")
         ));
     }
-    // readings the run makes suspect, but for an axis left out (its line above says it)
+    // readings the run makes suspect, but for an axis left out (its line above says it); and
+    // those of a separate held-out run (said, and in the summary, but deciding nothing here)
+    let held_suspects = match &hview {
+        Some(h) => {
+            let (names, cols): (Vec<&str>, Vec<&[f64]>) = ck
+                .temps
+                .iter()
+                .copied()
+                .chain(ck.axes.iter().map(String::as_str))
+                .filter_map(|c| h.col(c).ok().map(|col| (c, col)))
+                .unzip();
+            crate::guard::suspect_readings(&h.source, &names, &cols, h.time)
+        }
+        None => Vec::new(),
+    };
     for sp in suspect_readings
         .iter()
+        .chain(&held_suspects)
         .filter(|sp| !left_out.contains(&sp.column))
     {
         notes.push(format!("suspect reading: {}", sp.text));
@@ -2158,37 +2168,6 @@ pub fn identify(
             })
         })
         .collect();
-    // a separate held-out run whose probes start away from zero: the file predicts the drift
-    // from a run's start, so the start's reading counts against it on every held-out row
-    if let Some(h) = &hview {
-        let mut away = Vec::new();
-        for a in &axes {
-            let eh = Reading::of(h, &a.axis)?;
-            let read: Vec<f64> = eh.kept(&eh.values, 0..h.len());
-            let Some(&first) = read.first() else {
-                continue;
-            };
-            let span = read.iter().fold(f64::NEG_INFINITY, |x, &v| x.max(v))
-                - read.iter().fold(f64::INFINITY, |x, &v| x.min(v));
-            if first.abs() > (ratio * a.noise_um).max(START_AWAY_SHARE * span) {
-                away.push(format!(
-                    "{} at {first:.2} µm (it moves {span:.1} µm)",
-                    a.axis
-                ));
-            }
-        }
-        if !away.is_empty() {
-            notes.push(format!(
-                "{}'s probes start away from zero: {}. The file predicts a run's drift from its \
-                 start, where it is 0, so that reading counts against it on every held-out row: \
-                 a log cut in two is held out as its tail when its clock goes on from the \
-                 training run's (`time_s` kept), and a run of its own is read with its probes \
-                 zeroed at its start",
-                h.source,
-                away.join(", ")
-            ));
-        }
-    }
     if !worse.is_empty() {
         notes.push(format!(
             "held out, the file predicts {} worse than no compensation at all (the drift from the \
@@ -2310,7 +2289,7 @@ pub fn identify(
         copies,
         notes,
         calibration_iterations: cal.n_iter,
-        suspect_readings,
+        suspect_readings: suspect_readings.into_iter().chain(held_suspects).collect(),
         calibration_converged: cal.converged,
         network_fit,
         unsensed,
