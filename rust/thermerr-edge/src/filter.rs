@@ -95,7 +95,8 @@ impl LineFilter {
         }
         if !missing.is_empty() {
             return Err(format!(
-                "the input has no column {} (columns are: {})",
+                "the input has no column {} (columns are: {}; a logger's own names are mapped \
+                 with --rename 'OLD=NEW', e.g. --rename 'Temp * (°C)=T_*')",
                 missing.join(", "),
                 names.join(", ")
             ));

@@ -308,9 +308,11 @@ fn binary_maps_a_loggers_header_by_rename() {
         "{}",
         String::from_utf8_lossy(&with_ref.stderr)
     );
-    // without the renames the model's columns are missing; a misspelt one, or no `=`: refused
+    // without the renames the model's columns are missing, and the refusal shows the option; a
+    // misspelt one, or no `=`: refused
     let e = edge(&[b.to_str().unwrap()]);
     assert_eq!(e.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&e.stderr).contains("mapped with --rename 'OLD=NEW'"));
     let e = edge(&[b.to_str().unwrap(), "--rename", "Tmp * (°C)=T_*"]);
     assert_eq!(e.status.code(), Some(2));
     let err = String::from_utf8_lossy(&e.stderr);
