@@ -414,6 +414,12 @@ pub fn all_dropped(
     )
 }
 
+/// A best candidate that lowers the error's held-out RMS by this much (%), and by twice its
+/// score or more, has both said: on a long run whose network misses its temperatures the
+/// normalised residual is mostly theirs (a week's ambient coupling: 64 % of the error, 5 % of
+/// the residual).
+const ERROR_GAIN_SAID_PCT: f64 = 10.0;
+
 /// The sentence when no cause is named (`verdict` is `none` or `unexplained`).
 pub fn unnamed(
     verdict: Verdict,
@@ -433,7 +439,13 @@ pub fn unnamed(
                 }
                 _ => String::new(),
             };
-            format!("{} {:.0} %{why}", c.cause, 100.0 * c.score)
+            // a score far below what the candidate does to the error: both, as they are
+            let error =
+                match c.gain_pct >= ERROR_GAIN_SAID_PCT && c.gain_pct >= 2.0 * 100.0 * c.score {
+                    true => format!(", though {:.0} % of the error's held-out RMS", c.gain_pct),
+                    false => String::new(),
+                };
+            format!("{} {:.0} %{error}{why}", c.cause, 100.0 * c.score)
         })
         .unwrap_or_default();
     let (b, ratio, min) = (base.rmse_um, base.rmse_um / noise_um, 100.0 * min_score);
@@ -443,7 +455,7 @@ pub fn unnamed(
         )
     } else {
         format!(
-            "The calibrated model leaves a structured held-out RMS error of {b:.2} µm on {axis} ({ratio:.1}× the probe noise of {noise_um:.2} µm), and no catalogued extension that may be named removes {min:.0} % of it (best: {best})."
+            "The calibrated model leaves a structured held-out RMS error of {b:.2} µm on {axis} ({ratio:.1}× the probe noise of {noise_um:.2} µm), and no catalogued extension that may be named removes {min:.0} % of the normalised held-out residual (error and temperatures) (best: {best})."
         )
     }
 }
@@ -607,6 +619,13 @@ mod tests {
         assert!(s.contains("(best: thermal_lag 45 %, not named: it does not improve the training fit enough (ΔBIC = -5"), "{s}");
         assert!(
             s.contains("no catalogued extension that may be named removes 10 %"),
+            "{s}"
+        );
+        // a score far below the error's gain: both said
+        let weak = candidate(Cause::AmbientCoupling, 0.05, 0.9, -3800.0);
+        let s = unnamed(Verdict::Unexplained, &[weak], &base, 0.1, "E_z", 0.1);
+        assert!(
+            s.contains("removes 10 % of the normalised held-out residual (error and temperatures) (best: ambient_coupling 5 %, though 65 % of the error's held-out RMS)"),
             "{s}"
         );
         let s = all_dropped(Verdict::Unexplained, &bic, &base, 0.1, "E_z");
