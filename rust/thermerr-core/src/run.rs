@@ -611,33 +611,31 @@ pub fn check_unseen(
         .take(SHARED_OFFSETS_TRIED)
         .map(|(_, d)| d);
     // at each, the longest stretch of consecutive rows alike: (changing rows, first, last, d)
+    let alike = |j: usize, d: isize| {
+        let i = j as isize + d;
+        i >= 0 && i < nt as isize && held_keys[j] == train_keys[i as usize]
+    };
     let mut best: Option<(usize, usize, usize, isize)> = None;
     for d in offsets {
-        let mut stretch: Option<(usize, usize)> = None; // (first row, changing rows)
-        for j in 0..nh {
-            let i = j as isize + d;
-            if i < 0 || i >= nt as isize || held_keys[j] != train_keys[i as usize] {
-                stretch = None;
+        let mut j = 0;
+        while j < nh {
+            if !alike(j, d) {
+                j += 1;
                 continue;
             }
-            let (first, n) = stretch.get_or_insert((j, 0));
-            *n += usize::from(j == *first || changes(&held_keys, j));
-            if *n >= SHARED_ROWS_MIN && best.is_none_or(|b| *n > b.0) {
-                best = Some((*n, *first, j, d));
+            let (first, mut n) = (j, 0);
+            while j < nh && alike(j, d) {
+                n += usize::from(j == first || changes(&held_keys, j));
+                j += 1;
+            }
+            if n >= SHARED_ROWS_MIN && best.is_none_or(|b| n > b.0) {
+                best = Some((n, first, j - 1, d));
             }
         }
     }
     let Some((_, first, end, d)) = best else {
         return Ok(());
     };
-    // the stretch runs on to its end
-    let end = (end..nh)
-        .take_while(|&j| {
-            let i = j as isize + d;
-            i < nt as isize && held_keys[j] == train_keys[i as usize]
-        })
-        .last()
-        .unwrap_or(end);
     let row = |j: usize| (j as isize + d) as u64 + 1;
     Err(Error::Parse {
         file: held_source.to_string(),

@@ -1145,17 +1145,18 @@ pub fn identify(
     };
     let t = &run.time_s[..m];
     let mut notes = Vec::new();
-    // readings the run itself makes suspect: said, not changed
-    let suspect_readings = {
-        let names: Vec<&str> = ck
-            .temps
+    // readings a run itself makes suspect, of the columns identification reads: said, not
+    // changed (a separate held-out run's too, below)
+    fn suspects_in(v: &RunView<'_>, temps: &[&str], axes: &[String]) -> Vec<crate::guard::Suspect> {
+        let (names, cols): (Vec<&str>, Vec<&[f64]>) = temps
             .iter()
             .copied()
-            .chain(ck.axes.iter().map(String::as_str))
-            .collect();
-        let cols: Vec<&[f64]> = names.iter().map(|c| view.col(c)).collect::<Result<_>>()?;
-        crate::guard::suspect_readings(&file, &names, &cols, &run.time_s)
-    };
+            .chain(axes.iter().map(String::as_str))
+            .filter_map(|c| v.col(c).ok().map(|col| (c, col)))
+            .unzip();
+        crate::guard::suspect_readings(&v.source, &names, &cols, v.time)
+    }
+    let suspect_readings = suspects_in(&view, &ck.temps, &ck.axes);
     // a probe that reads one value in every row has no drift to map (its map would be zeros,
     // and every diagnosis would leave it out): every axis (no `--axis`) goes on without it, as
     // the diagnosis of every axis does; named, it is refused, as the diagnosis of it is
@@ -1210,16 +1211,7 @@ pub fn identify(
     // readings the run makes suspect, but for an axis left out (its line above says it); and
     // those of a separate held-out run (said, and in the summary, but deciding nothing here)
     let held_suspects = match &hview {
-        Some(h) => {
-            let (names, cols): (Vec<&str>, Vec<&[f64]>) = ck
-                .temps
-                .iter()
-                .copied()
-                .chain(ck.axes.iter().map(String::as_str))
-                .filter_map(|c| h.col(c).ok().map(|col| (c, col)))
-                .unzip();
-            crate::guard::suspect_readings(&h.source, &names, &cols, h.time)
-        }
+        Some(h) => suspects_in(h, &ck.temps, &ck.axes),
         None => Vec::new(),
     };
     for sp in suspect_readings
