@@ -223,11 +223,17 @@ class Run:
         naming both files and the rows) when it holds a stretch of ``training``'s rows: ten or
         more changing rows in a row that read, in every column both have, exactly as
         ``training``'s do (a piece cut from the training log, its clock kept or restarted, or a
-        copy). Its "held-out" figures would be scored on rows the fit trains on. Two runs of one
-        machine do not read alike row for row; a piece cut out and resampled is not recognised."""
+        copy). Its "held-out" figures would be scored on rows the fit trains on. Nor rows taken from
+        the training log in turn (odd rows to train and even rows to hold out, every third row, a
+        thinned copy): at least half of this run's rows fall on ``training``'s clock between two
+        of its consecutive samples and read within three typical steps of them in every column,
+        so every held-out row has training rows beside it (time series are validated in time
+        order). Two runs of one machine do not read alike row for row; a piece cut out and
+        resampled at another step is not recognised."""
         names = [n for n in training.names if n in self._index]
         if names:
-            _core.check_unseen(training.source, training.matrix(names), self.source, self.matrix(names))
+            _core.check_unseen(training.source, training.time_s, training.matrix(names), self.source, self.time_s,
+                               self.matrix(names))
 
     def continues(self, before: Run) -> bool:
         """Whether this run is the continuation of ``before``, cut from the same log: its clock

@@ -371,8 +371,8 @@ def _joined(run: Run, holdout: Run | None) -> tuple[Run, Run | None, int | None]
     model runs on through the join from the training run's start. As a separate run its first
     readings would be taken for a start, and its error, relative to the log's start, would look
     like tens of µm of drift. Anything else is returned as given; a ``holdout`` holding a
-    stretch of ``run``'s rows is refused (:meth:`Run.check_unseen`: its "held-out" figures would
-    be the training fit's)."""
+    stretch of ``run``'s rows, or rows taken from its log in turn, is refused
+    (:meth:`Run.check_unseen`: its "held-out" figures would be the training fit's)."""
     if holdout is not None:
         holdout.check_unseen(run)
     if holdout is None or not holdout.continues(run):

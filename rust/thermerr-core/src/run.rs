@@ -552,11 +552,136 @@ const SHARED_OFFSETS_TRIED: usize = 4;
 /// column both runs have exactly as a stretch of the training run's (a piece cut from the
 /// training log, its clock kept or restarted). Its "held-out" figures would be scored on rows
 /// the fit trains on, and, taken as a run of its own from its first readings, scored wrongly
-/// besides. `train` and `held` are the same columns, in one order; the time is not among them.
-/// Two runs of one machine on a coarse logger pass through the same readings, but not row after
-/// row for ten changes; a piece cut out and resampled is not recognised. One line naming the
-/// held-out file, its rows and the training run's.
+/// besides. `train` and `held` are the same columns, in one order; the time is not among them
+/// (`train_time`, `held_time`: each run's clock, s). Two runs of one machine on a coarse logger
+/// pass through the same readings, but not row after row for ten changes; a piece cut out and
+/// resampled is not recognised. Then [`check_interleaved`]. One line naming the held-out file,
+/// its rows and the training run's.
 pub fn check_unseen(
+    train_source: &str,
+    train_time: &[f64],
+    train: &[&[f64]],
+    held_source: &str,
+    held_time: &[f64],
+    held: &[&[f64]],
+) -> Result<()> {
+    check_shared(train_source, train, held_source, held)?;
+    check_interleaved(
+        train_source,
+        train_time,
+        train,
+        held_source,
+        held_time,
+        held,
+    )
+}
+
+/// Refuses a held-out run whose rows sit between the training run's on its clock: at least
+/// half its rows, and [`SHARED_ROWS_MIN`] or more, each differing from the row before, fall on
+/// the training run's clock at or between two of its consecutive samples (no more than
+/// [`INTERLEAVE_GAP_STEPS`] of its sampling steps apart) and read, in every column both runs
+/// have, within [`INTERLEAVE_SLACK`] of that column's typical step (the median change between
+/// the training run's consecutive rows that change) of the range of those two samples. That is a log split
+/// by rows taken in turn (odd and even rows, every third row held out, a thinned copy): each
+/// held-out row's neighbours on either side are training rows, so its figures say little of a
+/// run the fit has not seen (time series are validated in time order: a later stretch or
+/// another run). A clock kept from the log is recognised (or one restarted in step with it);
+/// another run on the same clock (a logger's time of day) reads otherwise in some column
+/// within a few rows: on the real 46-h run, no row of one quarter read so beside another
+/// quarter's on one clock, where 98 % of the odd rows did beside the even ones.
+pub fn check_interleaved(
+    train_source: &str,
+    train_time: &[f64],
+    train: &[&[f64]],
+    held_source: &str,
+    held_time: &[f64],
+    held: &[&[f64]],
+) -> Result<()> {
+    let (nt, nh) = (train_time.len(), held_time.len());
+    if train.is_empty() || train.len() != held.len() || nt < 2 || nh < SHARED_ROWS_MIN {
+        return Ok(());
+    }
+    let median = |mut v: Vec<f64>| -> f64 {
+        v.retain(|x| x.is_finite());
+        if v.is_empty() {
+            return 0.0;
+        }
+        let k = v.len() / 2;
+        *v.select_nth_unstable_by(k, f64::total_cmp).1
+    };
+    let step = median(train_time.windows(2).map(|w| w[1] - w[0]).collect());
+    if step <= 0.0 {
+        return Ok(());
+    }
+    // a column's typical step: the median change between consecutive rows that change (a
+    // logger's resolution where most rows repeat)
+    let typical: Vec<f64> = train
+        .iter()
+        .map(|c| {
+            median(
+                c.windows(2)
+                    .map(|w| (w[1] - w[0]).abs())
+                    .filter(|d| *d > 0.0)
+                    .collect(),
+            )
+        })
+        .collect();
+    // the held-out row's training neighbours on the clock: (i, i) on a shared stamp, (i, i + 1)
+    // between two samples one step or so apart
+    let around = |tau: f64| -> Option<(usize, usize)> {
+        let i = train_time.partition_point(|&t| t <= tau).checked_sub(1)?;
+        if train_time[i] == tau {
+            return Some((i, i));
+        }
+        (i + 1 < nt && train_time[i + 1] - train_time[i] <= INTERLEAVE_GAP_STEPS * step)
+            .then_some((i, i + 1))
+    };
+    let within = |j: usize, (a, b): (usize, usize)| {
+        train.iter().zip(held).zip(&typical).all(|((tc, hc), &ty)| {
+            let (lo, hi) = (tc[a].min(tc[b]), tc[a].max(tc[b]));
+            let (v, slack) = (hc[j], INTERLEAVE_SLACK * ty);
+            v.is_nan() || (lo - slack <= v && v <= hi + slack)
+        })
+    };
+    let changes = |j: usize| j == 0 || held.iter().any(|c| c[j].to_bits() != c[j - 1].to_bits());
+    let mut seen: Vec<(usize, (usize, usize))> = Vec::new(); // (held row, training rows)
+    for j in (0..nh).filter(|&j| changes(j)) {
+        if let Some(ab) = around(held_time[j]).filter(|&ab| within(j, ab)) {
+            seen.push((j, ab));
+        }
+    }
+    if seen.len() < SHARED_ROWS_MIN || 2 * seen.len() < nh {
+        return Ok(());
+    }
+    let (first, last) = (seen[0], seen[seen.len() - 1]);
+    Err(Error::Parse {
+        file: held_source.to_string(),
+        line: None,
+        row: None,
+        column: None,
+        reason: format!(
+            "{} of its {nh} rows (rows {}-{}) fall between rows {}-{} of {train_source} on its clock and read as they do (in all {} columns both have, within {INTERLEAVE_SLACK} typical steps): rows taken from the training log in turn (odd and even rows, or a thinned copy), so every held-out row has training rows beside it; hold out a later stretch of the log or a run of its own (time series are validated in time order)",
+            seen.len(),
+            first.0 + 1,
+            last.0 + 1,
+            first.1 .0 + 1,
+            last.1 .1 + 1,
+            train.len(),
+        ),
+    })
+}
+
+/// A held-out row may sit this many of the training run's sampling steps from the training
+/// rows either side of it on the clock ([`check_interleaved`]): one step for odd and even rows,
+/// two for every third row held out, and a logger's jitter.
+const INTERLEAVE_GAP_STEPS: f64 = 3.5;
+/// A held-out row reads within this many typical steps of its training neighbours' range, in
+/// every column ([`check_interleaved`]): a noisy reading between two is not always inside their
+/// range.
+const INTERLEAVE_SLACK: f64 = 3.0;
+
+/// The first part of [`check_unseen`]: a stretch of the training run's rows, at one offset.
+fn check_shared(
     train_source: &str,
     train: &[&[f64]],
     held_source: &str,
@@ -1193,13 +1318,65 @@ mod tests {
         cols.iter().map(|c| &c[rows.clone()]).collect()
     }
 
+    /// A 15-s clock over `rows`.
+    fn clock(rows: std::ops::Range<usize>) -> Vec<f64> {
+        rows.map(|r| r as f64 * 15.0).collect()
+    }
+
+    #[test]
+    fn rows_taken_from_the_training_log_in_turn_are_refused() {
+        let run = logged(1, 2000);
+        let t = clock(0..2000);
+        let pick = |rows: &[usize]| -> (Vec<f64>, Vec<Vec<f64>>) {
+            (
+                rows.iter().map(|&r| t[r]).collect(),
+                run.iter()
+                    .map(|c| rows.iter().map(|&r| c[r]).collect())
+                    .collect(),
+            )
+        };
+        let even: Vec<usize> = (0..2000).step_by(2).collect();
+        let odd: Vec<usize> = (1..2000).step_by(2).collect();
+        let ((te, e), (to, o)) = (pick(&even), pick(&odd));
+        let (ev, ov) = (view(&e, 0..1000), view(&o, 0..1000));
+        let err = check_unseen("even.csv", &te, &ev, "odd.csv", &to, &ov)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("odd.csv: ")
+                && err.contains("of its 1000 rows (rows 1-998) fall between rows 1-999 of even.csv on its clock"),
+            "{err}"
+        );
+        // every third row held out; a thinned copy of the training rows themselves
+        let (two, third): (Vec<usize>, Vec<usize>) = (0..2000).partition(|r| r % 3 != 2);
+        let ((tt, tw), (th, tr)) = (pick(&two), pick(&third));
+        let (tv, hv) = (view(&tw, 0..tt.len()), view(&tr, 0..th.len()));
+        assert!(check_unseen("two.csv", &tt, &tv, "third.csv", &th, &hv).is_err());
+        let all = view(&run, 0..2000);
+        assert!(check_unseen("run.csv", &t, &all, "thin.csv", &te, &ev).is_err());
+        // the clock restarted at 0: each odd row now on the stamp of the even row before it,
+        // which it reads as within a step, so refused too; restarted anywhere else, the rows
+        // meet others of the training run and are not recognised
+        let restarted: Vec<f64> = to.iter().map(|x| x - to[0]).collect();
+        assert!(check_unseen("even.csv", &te, &ev, "odd.csv", &restarted, &ov).is_err());
+        let later: Vec<f64> = to.iter().map(|x| x + 9000.0).collect();
+        assert!(check_unseen("even.csv", &te, &ev, "odd.csv", &later, &ov).is_ok());
+    }
+
     #[test]
     fn a_held_out_piece_of_the_training_run_is_refused() {
         let run = logged(1, 2000);
         let train = view(&run, 0..2000);
-        let e = check_unseen("run.csv", &train, "tail.csv", &view(&run, 1500..2000))
-            .unwrap_err()
-            .to_string();
+        let e = check_unseen(
+            "run.csv",
+            &clock(0..2000),
+            &train,
+            "tail.csv",
+            &clock(0..500),
+            &view(&run, 1500..2000),
+        )
+        .unwrap_err()
+        .to_string();
         assert!(
             e.starts_with("tail.csv: rows 1-500 are rows 1501-2000 of run.csv ("),
             "{e}"
@@ -1210,9 +1387,16 @@ mod tests {
         for (m, r) in more.iter_mut().zip(&run) {
             m[..100].copy_from_slice(&r[1900..]);
         }
-        let e = check_unseen("run.csv", &train, "next.csv", &view(&more, 0..500))
-            .unwrap_err()
-            .to_string();
+        let e = check_unseen(
+            "run.csv",
+            &clock(0..2000),
+            &train,
+            "next.csv",
+            &clock(0..500),
+            &view(&more, 0..500),
+        )
+        .unwrap_err()
+        .to_string();
         assert!(
             e.starts_with("next.csv: rows 1-100 are rows 1901-2000 of run.csv"),
             "{e}"
@@ -1225,20 +1409,70 @@ mod tests {
         // but not ten changing rows at one offset
         let (a, b) = (logged(1, 2000), logged(2, 2000));
         let run = view(&a, 0..2000);
-        assert!(check_unseen("run.csv", &run, "other.csv", &view(&b, 0..2000)).is_ok());
+        assert!(check_shared("run.csv", &run, "other.csv", &view(&b, 0..2000)).is_ok());
         // an idle machine: every row alike in both
         let idle: Vec<Vec<f64>> = (0..4).map(|c| vec![20.0 + c as f64; 500]).collect();
         let still = view(&idle, 0..500);
-        assert!(check_unseen("idle.csv", &still, "idle2.csv", &still).is_ok());
+        let t = clock(0..500);
+        assert!(check_unseen("idle.csv", &t, &still, "idle2.csv", &t, &still).is_ok());
         // fewer changing rows than the floor, or other columns: nothing to say
         assert!(check_unseen(
             "run.csv",
+            &clock(0..2000),
             &run,
             "short.csv",
+            &clock(0..SHARED_ROWS_MIN - 1),
             &view(&a, 0..SHARED_ROWS_MIN - 1)
         )
         .is_ok());
-        assert!(check_unseen("run.csv", &run, "few.csv", &view(&a, 0..2000)[..3]).is_ok());
+        let few = &view(&a, 0..2000)[..3];
+        assert!(check_unseen(
+            "run.csv",
+            &clock(0..2000),
+            &run,
+            "few.csv",
+            &clock(0..2000),
+            few
+        )
+        .is_ok());
+    }
+
+    #[test]
+    fn another_run_on_the_same_clock_is_not_refused() {
+        // the same duty on the same clock (a logger's time of day), on the stamps and between
+        // them: its temperatures within the logger's resolution of the training run's, as
+        // `logged` makes them, but its probe's drift 5 % larger (no machine repeats its drift
+        // to a tenth of a µm: on the real 46-h run no row of one quarter read within three
+        // steps of another quarter's on one clock, where 98 % of odd rows did of even ones)
+        let a = logged(1, 2000);
+        let mut b = logged(2, 2000);
+        for v in b[3].iter_mut() {
+            *v = (*v * 1.05 * 10.0).round() / 10.0;
+        }
+        let t = clock(0..2000);
+        let shifted: Vec<f64> = t.iter().map(|x| x + 7.5).collect();
+        for other in [&t, &shifted] {
+            assert!(check_unseen(
+                "run.csv",
+                &t,
+                &view(&a, 0..2000),
+                "other.csv",
+                other,
+                &view(&b, 0..2000)
+            )
+            .is_ok());
+        }
+        // with the very drift, the runs are one log's rows to this check: refused
+        let b2 = logged(2, 2000);
+        assert!(check_unseen(
+            "run.csv",
+            &t,
+            &view(&a, 0..2000),
+            "other.csv",
+            &shifted,
+            &view(&b2, 0..2000)
+        )
+        .is_err());
     }
 
     #[test]

@@ -136,15 +136,18 @@ fn probe_faults<'py>(
     ))
 }
 
-/// Refuses a held-out run holding a stretch of the training run's rows
-/// (`thermerr_core::run::check_unseen`): the same columns of each, in one order, one line
-/// naming both files and the rows, a `DataError`.
+/// Refuses a held-out run holding a stretch of the training run's rows, or rows taken from its
+/// log in turn (`thermerr_core::run::check_unseen`): each run's clock and the same columns of
+/// each, in one order; one line naming both files and the rows, a `DataError`.
 #[pyfunction]
+#[allow(clippy::too_many_arguments)]
 fn check_unseen(
     py: Python<'_>,
     train_source: &str,
+    train_time: PyReadonlyArray1<'_, f64>,
     train: PyReadonlyArray2<'_, f64>,
     held_source: &str,
+    held_time: PyReadonlyArray1<'_, f64>,
     held: PyReadonlyArray2<'_, f64>,
 ) -> PyResult<()> {
     let columns = |a: &PyReadonlyArray2<'_, f64>| -> Vec<Vec<f64>> {
@@ -152,10 +155,14 @@ fn check_unseen(
         (0..v.ncols()).map(|j| v.column(j).to_vec()).collect()
     };
     let (t, h) = (columns(&train), columns(&held));
+    let (tt, ht) = (
+        train_time.as_array().to_vec(),
+        held_time.as_array().to_vec(),
+    );
     crate::detach_short(py, || {
         let tc: Vec<&[f64]> = t.iter().map(Vec::as_slice).collect();
         let hc: Vec<&[f64]> = h.iter().map(Vec::as_slice).collect();
-        thermerr_core::run::check_unseen(train_source, &tc, held_source, &hc)
+        thermerr_core::run::check_unseen(train_source, &tt, &tc, held_source, &ht, &hc)
     })
 }
 
