@@ -212,3 +212,30 @@ def test_a_second_run_on_a_clock_that_ran_on_is_its_own_run(tmp_path, capsys):
     assert "b.csv's clock goes on from " in out and "a.csv's last sample, but the machine does not" in out, out
     assert "held out as a run of its own" in out and "continues" not in out
     assert json.loads((tmp_path / "d" / "report.json").read_text())["holdout"].startswith("the separate run ")
+
+
+def test_a_scored_probe_that_starts_away_from_zero_is_warned_of(tmp_path, capsys):
+    """A run scored by ``thermerr evaluate`` (or ``fit --test``) whose probe reads away from zero
+    at its first reading (a probe not zeroed, or the second half of a log with its clock
+    restarted: on the real 46-h run's second half E_ch1 starts at 3.87 µm of the 22.4 it moves)
+    carries that reading against the model on every row: one warning line names the file, the
+    probe and the reading (the rule of the diagnosis's suspect reading ``start``, in the core),
+    and the run is scored as read, exit 0. A probe zeroed at the start, or the piece evaluated
+    ``--after`` its log, is not warned of."""
+    t = np.arange(0.0, 6 * 3600.0, 60.0)
+    temp = 20.0 + 5.0 * (1.0 - np.exp(-t / 7200.0))
+    cols = {"time_s": t, "T_a": temp, "E_z": 4.0 * (temp - 20.0)}
+    train = _write(tr.Run.from_frame(cols, source="train"), tmp_path / "train.csv")
+    warm = _write(tr.Run.from_frame({**cols, "E_z": cols["E_z"] + 5.0}, source="warm"), tmp_path / "warm.csv")
+    model = tmp_path / "m.json"
+    assert main(["fit", str(train), "--axis", "E_z", "--model", "mlr", "--no-guard", "--out", str(model),
+                 "--quiet"]) == 0
+    capsys.readouterr()
+    assert main(["evaluate", str(model), str(warm)]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith(f"thermerr: warning: {warm}: E_z reads 5.00 µm at its first right reading"), err
+    assert main(["evaluate", str(model), str(train)]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["fit", str(train), "--axis", "E_z", "--model", "mlr", "--no-guard", "--test", str(warm), "--out",
+                 str(tmp_path / "m2.json"), "--quiet"]) == 0
+    assert "E_z reads 5.00 µm at its first right reading" in capsys.readouterr().err

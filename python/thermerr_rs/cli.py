@@ -371,6 +371,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
                    f"its clock starts {test_run.time_s[0] - run.time_s[-1]:g} s after the training run's last sample")
             _say(args, f"{test_run.source} continues {run.source} ({why}): predicted from the training run's "
                        "start, as a gateway running since then (rises and history go on through the join)")
+        if after is None:
+            _start_warning(test_run, args.axis)
         closed = model.predict_run(test_run, after=after)
         held = scores(test_run[args.axis], closed)
         report["test"] = held.summary()
@@ -415,6 +417,14 @@ def _piece_note(args: argparse.Namespace, run: Run, after: Run | None, start: st
                    "sampling step after it")
 
 
+def _start_warning(run: Run, target: str) -> None:
+    """Warns (one line on stderr) when the scored run's probe reads away from zero at its start
+    (:meth:`Run.start_note`): its scores carry that reading on every row."""
+    note = run.start_note(target)
+    if note:
+        print(f"thermerr: warning: {note}", file=sys.stderr)
+
+
 def cmd_evaluate(args: argparse.Namespace) -> int:
     from .base import Estimator, load_model
 
@@ -428,6 +438,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
         run.check_unseen(after)  # a piece that overlaps the log before it: rows counted twice
     if getattr(model, "inputs_", None) == "rise" or after is not None:
         _piece_note(args, run, after, "its rises are taken from its own first row")
+    if after is None:
+        _start_warning(run, target)
     closed = model.predict_run(run, after=after)
     s = scores(run[target], closed)
     if not args.json:

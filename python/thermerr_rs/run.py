@@ -182,12 +182,25 @@ class Run:
             raise ParameterError(f"{self.source}: no input columns given")
         for name in [target, *features]:
             self[name]  # raises MissingColumnError naming the column and the file
-        dead, failing = _core.probe_faults(self.source, target, np.ascontiguousarray(self[target], dtype=np.float64),
-                                           np.ascontiguousarray(self.time_s, dtype=np.float64))
+        dead, failing, _ = self._probe_faults(target)
         if dead is not None:
             raise ShapeError(f"{dead}, nothing to model; mend the probe")
         if failing is not None:
             warnings.warn(failing, SuspectReadingWarning, stacklevel=3)
+
+    def _probe_faults(self, target: str) -> tuple[str | None, str | None, str | None]:
+        return _core.probe_faults(self.source, target, np.ascontiguousarray(self[target], dtype=np.float64),
+                                  np.ascontiguousarray(self.time_s, dtype=np.float64))
+
+    def start_note(self, target: str) -> str | None:
+        """The line saying that probe ``target`` reads away from zero at this run's first right
+        reading (at least 10 % of what it moves over the run, and 2 µm, but within its movement:
+        a probe not zeroed at the start, or a piece of a longer log with its clock restarted),
+        or None. A model predicts a run's drift from its start, where it is 0, so that reading
+        counts against it on every row of the run's scores: ``thermerr evaluate`` and ``fit
+        --test`` warn with it (the run is scored as read). The same rule as the suspect reading
+        ``start`` of a diagnosis (docs/machine-model.md)."""
+        return self._probe_faults(target)[2]
 
     def input_matrix(self, features: list[str], form: str = "absolute", reference: Run | None = None) -> F64:
         """The model inputs built from the named columns: ``form="absolute"`` the readings as

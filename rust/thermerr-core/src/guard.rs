@@ -1006,6 +1006,15 @@ impl Suspect {
         ))
     }
 
+    /// The line saying that a probe's first reading is away from zero but within its movement
+    /// ([`SuspectKind::Start`]), for a run a model is scored on: the model predicts the drift
+    /// from the run's start, where it is 0, so the reading counts against it on every row; or
+    /// None.
+    pub fn start_reading(&self) -> Option<String> {
+        (self.kind == SuspectKind::Start && self.column.starts_with("E_"))
+            .then(|| self.text.clone())
+    }
+
     /// What shows the column failing, in words: its jumps ([`Suspect::jumps`]), or "reads one
     /// value in every row (166710 s)".
     pub fn fault(&self) -> String {
@@ -1162,7 +1171,7 @@ pub fn suspect_readings(
                     count: 1,
                     size: v,
                     text: format!(
-                        "{source}: {name} reads {v:.2} µm at its first right reading, {:.0} % of what it moves over the run ({:.1} µm): a run's drift is predicted from its start, where it is 0, so that reading counts against every model of the run on every row. A piece cut from a longer log (kept with its clock going on, it is held out as the log's tail), or a probe not zeroed at the start? The run is used as read",
+                        "{source}: {name} reads {v:.2} µm at its first right reading, {:.0} % of what it moves over the run ({:.1} µm): a run's drift is predicted from its start, where it is 0, so that reading counts against every model of the run on every row. A piece cut from a longer log with its clock restarted (with the log's clock kept, a held-out run, or `thermerr evaluate --after` the log's earlier rows, takes it as the log's tail), or a probe not zeroed at the start? The run is used as read",
                         100.0 * v.abs() / span,
                         span
                     ),

@@ -116,23 +116,26 @@ fn delimiter_named(text: &str) -> String {
     thermerr_core::dialect::Dialect::delimiter_named(text).to_string()
 }
 
-/// What makes probe `name` of run `source` unfit to be a fit's target: the line saying that it
-/// reads one value in every row (`thermerr_core::guard::Suspect::dead_probe`), and the line
-/// saying that it fails over some rows (`Suspect::failing_probe`); None for each that it does
-/// not.
+/// What makes probe `name` of run `source` unfit to be a fit's target, or suspect as a run to
+/// score a model on: the line saying that it reads one value in every row
+/// (`thermerr_core::guard::Suspect::dead_probe`), the line saying that it fails over some rows
+/// (`Suspect::failing_probe`), and the line saying that its first reading is away from zero
+/// (`Suspect::start_reading`: a probe not zeroed, a piece of a longer log); None for each that
+/// it does not.
 #[pyfunction]
 fn probe_faults<'py>(
     source: &str,
     name: &str,
     values: PyReadonlyArray1<'py, f64>,
     time: PyReadonlyArray1<'py, f64>,
-) -> PyResult<(Option<String>, Option<String>)> {
+) -> PyResult<(Option<String>, Option<String>, Option<String>)> {
     use thermerr_core::guard::Suspect;
     let (v, t) = (slice1(&values)?, slice1(&time)?);
     let found = thermerr_core::guard::suspect_readings(source, &[name], &[v], t);
     Ok((
         found.iter().find_map(Suspect::dead_probe),
         found.iter().find_map(Suspect::failing_probe),
+        found.iter().find_map(Suspect::start_reading),
     ))
 }
 
