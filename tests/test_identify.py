@@ -1207,6 +1207,23 @@ def test_a_held_out_run_whose_probes_start_away_from_zero_is_said():
     assert len(note) == 1 and "a run's drift is predicted from its start, where it is 0" in note[0], s["notes"]
 
 
+def _refused_as_held_out(train, held, tmp_path) -> list[str]:
+    """``held`` given as the held-out run of ``train`` to init, diagnose (with ``tmp_path``'s
+    m.toml) and fit: each exits 2 with one error line, which are returned."""
+    lines = []
+    for argv in (["init", str(train), "--holdout", str(held), "--out", str(tmp_path / "o.toml")],
+                 ["diagnose", str(train), "--machine", str(tmp_path / "m.toml"), "--holdout", str(held), "--out",
+                  str(tmp_path / "d")],
+                 ["fit", str(train), "--axis", "E_z", "--model", "mlr", "--test", str(held), "--out",
+                  str(tmp_path / "o.json")]):
+        r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", *argv], capture_output=True, text=True)
+        assert r.returncode == 2, (argv, r.stderr)
+        err = [line for line in r.stderr.splitlines() if line.startswith("thermerr: error:")]
+        assert len(err) == 1, r.stderr
+        lines.append(err[0])
+    return lines
+
+
 def test_a_holdout_cut_from_the_training_run_is_refused(tmp_path):
     """A held-out run cut from the training run's log (its tail, the clock kept or restarted)
     holds rows the fit trains on: init, diagnose and fit --test refuse it in one line naming
@@ -1231,15 +1248,8 @@ def test_a_holdout_cut_from_the_training_run_is_refused(tmp_path):
     # another run of the same machine, on the same duty: no refusal
     tr.Run.from_frame(c.test, source="other").check_unseen(train)
     (tmp_path / "m.toml").write_text(c.nominal_toml())
-    for argv in (["init", str(paths["run"]), "--holdout", str(paths["tail"]), "--out", str(tmp_path / "o.toml")],
-                 ["diagnose", str(paths["run"]), "--machine", str(tmp_path / "m.toml"), "--holdout",
-                  str(paths["tail"]), "--out", str(tmp_path / "d")],
-                 ["fit", str(paths["run"]), "--axis", "E_z", "--model", "mlr", "--test", str(paths["tail"]),
-                  "--out", str(tmp_path / "o.json")]):
-        r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", *argv], capture_output=True, text=True)
-        assert r.returncode == 2, (argv, r.stderr)
-        err = [line for line in r.stderr.splitlines() if line.startswith("thermerr: error:")]
-        assert len(err) == 1 and f"tail.csv: rows 1-{n - 60} are rows 61-{n} of {paths['run']}" in err[0], r.stderr
+    for err in _refused_as_held_out(paths["run"], paths["tail"], tmp_path):
+        assert f"tail.csv: rows 1-{n - 60} are rows 61-{n} of {paths['run']}" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m.toml", "other.csv", "run.csv", "tail.csv"]
     # a model evaluated on the piece "after" the log it was cut from: its rows would count twice
     model = tmp_path / "model.json"
@@ -1276,13 +1286,6 @@ def test_rows_taken_from_the_training_log_in_turn_are_refused_as_held_out(tmp_pa
         tr.read_run(paths["third"]).check_unseen(tr.read_run(paths["two"]))
     tr.Run.from_frame(c.test, source="other").check_unseen(even)  # a run of its own: not refused
     (tmp_path / "m.toml").write_text(c.nominal_toml())
-    for argv in (["init", str(paths["even"]), "--holdout", str(paths["odd"]), "--out", str(tmp_path / "o.toml")],
-                 ["diagnose", str(paths["even"]), "--machine", str(tmp_path / "m.toml"), "--holdout",
-                  str(paths["odd"]), "--out", str(tmp_path / "d")],
-                 ["fit", str(paths["even"]), "--axis", "E_z", "--model", "mlr", "--test", str(paths["odd"]),
-                  "--out", str(tmp_path / "o.json")]):
-        r = subprocess.run([sys.executable, "-m", "thermerr_rs.cli", *argv], capture_output=True, text=True)
-        assert r.returncode == 2, (argv, r.stderr)
-        err = [line for line in r.stderr.splitlines() if line.startswith("thermerr: error:")]
-        assert len(err) == 1 and "rows taken from the training log in turn" in err[0], r.stderr
+    for err in _refused_as_held_out(paths["even"], paths["odd"], tmp_path):
+        assert "rows taken from the training log in turn" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["even.csv", "m.toml", "odd.csv", "third.csv", "two.csv"]

@@ -552,28 +552,22 @@ const SHARED_OFFSETS_TRIED: usize = 4;
 /// column both runs have exactly as a stretch of the training run's (a piece cut from the
 /// training log, its clock kept or restarted). Its "held-out" figures would be scored on rows
 /// the fit trains on, and, taken as a run of its own from its first readings, scored wrongly
-/// besides. `train` and `held` are the same columns, in one order; the time is not among them
-/// (`train_time`, `held_time`: each run's clock, s). Two runs of one machine on a coarse logger
+/// besides. Both runs' `cols` are the same columns, in one order ([`Logged`]). Two runs of one machine on a coarse logger
 /// pass through the same readings, but not row after row for ten changes; a piece cut out and
 /// resampled is not recognised. Then [`check_interleaved`]. One line naming the held-out file,
 /// its rows and the training run's.
-pub fn check_unseen(
-    train_source: &str,
-    train_time: &[f64],
-    train: &[&[f64]],
-    held_source: &str,
-    held_time: &[f64],
-    held: &[&[f64]],
-) -> Result<()> {
-    check_shared(train_source, train, held_source, held)?;
-    check_interleaved(
-        train_source,
-        train_time,
-        train,
-        held_source,
-        held_time,
-        held,
-    )
+pub fn check_unseen(train: Logged<'_>, held: Logged<'_>) -> Result<()> {
+    check_shared(train, held)?;
+    check_interleaved(train, held)
+}
+
+/// A run as [`check_unseen`] reads it: its name, its clock (s) and its columns (the time not
+/// among them).
+#[derive(Clone, Copy)]
+pub struct Logged<'a> {
+    pub source: &'a str,
+    pub time: &'a [f64],
+    pub cols: &'a [&'a [f64]],
 }
 
 /// Refuses a held-out run whose rows sit between the training run's on its clock: at least
@@ -581,22 +575,16 @@ pub fn check_unseen(
 /// the training run's clock at or between two of its consecutive samples (no more than
 /// [`INTERLEAVE_GAP_STEPS`] of its sampling steps apart) and read, in every column both runs
 /// have, within [`INTERLEAVE_SLACK`] of that column's typical step (the median change between
-/// the training run's consecutive rows that change) of the range of those two samples. That is a log split
-/// by rows taken in turn (odd and even rows, every third row held out, a thinned copy): each
-/// held-out row's neighbours on either side are training rows, so its figures say little of a
-/// run the fit has not seen (time series are validated in time order: a later stretch or
-/// another run). A clock kept from the log is recognised (or one restarted in step with it);
-/// another run on the same clock (a logger's time of day) reads otherwise in some column
-/// within a few rows: on the real 46-h run, no row of one quarter read so beside another
+/// the training run's consecutive rows that change) of the range of those two samples. That is
+/// a log split by rows taken in turn (odd and even rows, every third row held out, a thinned
+/// copy): each held-out row's neighbours on either side are training rows, so its figures say
+/// little of a run the fit has not seen (time series are validated in time order: a later
+/// stretch or another run). A clock kept from the log is recognised (or one restarted in step
+/// with it); another run on the same clock (a logger's time of day) reads otherwise in some
+/// column within a few rows: on the real 46-h run, no row of one quarter read so beside another
 /// quarter's on one clock, where 98 % of the odd rows did beside the even ones.
-pub fn check_interleaved(
-    train_source: &str,
-    train_time: &[f64],
-    train: &[&[f64]],
-    held_source: &str,
-    held_time: &[f64],
-    held: &[&[f64]],
-) -> Result<()> {
+fn check_interleaved(tr: Logged<'_>, ho: Logged<'_>) -> Result<()> {
+    let (train_time, train, held_time, held) = (tr.time, tr.cols, ho.time, ho.cols);
     let (nt, nh) = (train_time.len(), held_time.len());
     if train.is_empty() || train.len() != held.len() || nt < 2 || nh < SHARED_ROWS_MIN {
         return Ok(());
@@ -655,17 +643,18 @@ pub fn check_interleaved(
     }
     let (first, last) = (seen[0], seen[seen.len() - 1]);
     Err(Error::Parse {
-        file: held_source.to_string(),
+        file: ho.source.to_string(),
         line: None,
         row: None,
         column: None,
         reason: format!(
-            "{} of its {nh} rows (rows {}-{}) fall between rows {}-{} of {train_source} on its clock and read as they do (in all {} columns both have, within {INTERLEAVE_SLACK} typical steps): rows taken from the training log in turn (odd and even rows, or a thinned copy), so every held-out row has training rows beside it; hold out a later stretch of the log or a run of its own (time series are validated in time order)",
+            "{} of its {nh} rows (rows {}-{}) fall between rows {}-{} of {} on its clock and read as they do (in all {} columns both have, within {INTERLEAVE_SLACK} typical steps): rows taken from the training log in turn (odd and even rows, or a thinned copy), so every held-out row has training rows beside it; hold out a later stretch of the log or a run of its own (time series are validated in time order)",
             seen.len(),
             first.0 + 1,
             last.0 + 1,
             first.1 .0 + 1,
             last.1 .1 + 1,
+            tr.source,
             train.len(),
         ),
     })
@@ -681,12 +670,8 @@ const INTERLEAVE_GAP_STEPS: f64 = 3.5;
 const INTERLEAVE_SLACK: f64 = 3.0;
 
 /// The first part of [`check_unseen`]: a stretch of the training run's rows, at one offset.
-fn check_shared(
-    train_source: &str,
-    train: &[&[f64]],
-    held_source: &str,
-    held: &[&[f64]],
-) -> Result<()> {
+fn check_shared(tr: Logged<'_>, ho: Logged<'_>) -> Result<()> {
+    let (train_source, train, held_source, held) = (tr.source, tr.cols, ho.source, ho.cols);
     let (nt, nh) = (
         train.first().map_or(0, |c| c.len()),
         held.first().map_or(0, |c| c.len()),
@@ -1318,6 +1303,10 @@ mod tests {
         cols.iter().map(|c| &c[rows.clone()]).collect()
     }
 
+    fn lg<'a>(source: &'a str, time: &'a [f64], cols: &'a [&'a [f64]]) -> Logged<'a> {
+        Logged { source, time, cols }
+    }
+
     /// A 15-s clock over `rows`.
     fn clock(rows: std::ops::Range<usize>) -> Vec<f64> {
         rows.map(|r| r as f64 * 15.0).collect()
@@ -1339,7 +1328,7 @@ mod tests {
         let odd: Vec<usize> = (1..2000).step_by(2).collect();
         let ((te, e), (to, o)) = (pick(&even), pick(&odd));
         let (ev, ov) = (view(&e, 0..1000), view(&o, 0..1000));
-        let err = check_unseen("even.csv", &te, &ev, "odd.csv", &to, &ov)
+        let err = check_unseen(lg("even.csv", &te, &ev), lg("odd.csv", &to, &ov))
             .unwrap_err()
             .to_string();
         assert!(
@@ -1351,16 +1340,16 @@ mod tests {
         let (two, third): (Vec<usize>, Vec<usize>) = (0..2000).partition(|r| r % 3 != 2);
         let ((tt, tw), (th, tr)) = (pick(&two), pick(&third));
         let (tv, hv) = (view(&tw, 0..tt.len()), view(&tr, 0..th.len()));
-        assert!(check_unseen("two.csv", &tt, &tv, "third.csv", &th, &hv).is_err());
+        assert!(check_unseen(lg("two.csv", &tt, &tv), lg("third.csv", &th, &hv)).is_err());
         let all = view(&run, 0..2000);
-        assert!(check_unseen("run.csv", &t, &all, "thin.csv", &te, &ev).is_err());
+        assert!(check_unseen(lg("run.csv", &t, &all), lg("thin.csv", &te, &ev)).is_err());
         // the clock restarted at 0: each odd row now on the stamp of the even row before it,
         // which it reads as within a step, so refused too; restarted anywhere else, the rows
         // meet others of the training run and are not recognised
         let restarted: Vec<f64> = to.iter().map(|x| x - to[0]).collect();
-        assert!(check_unseen("even.csv", &te, &ev, "odd.csv", &restarted, &ov).is_err());
+        assert!(check_unseen(lg("even.csv", &te, &ev), lg("odd.csv", &restarted, &ov)).is_err());
         let later: Vec<f64> = to.iter().map(|x| x + 9000.0).collect();
-        assert!(check_unseen("even.csv", &te, &ev, "odd.csv", &later, &ov).is_ok());
+        assert!(check_unseen(lg("even.csv", &te, &ev), lg("odd.csv", &later, &ov)).is_ok());
     }
 
     #[test]
@@ -1368,12 +1357,8 @@ mod tests {
         let run = logged(1, 2000);
         let train = view(&run, 0..2000);
         let e = check_unseen(
-            "run.csv",
-            &clock(0..2000),
-            &train,
-            "tail.csv",
-            &clock(0..500),
-            &view(&run, 1500..2000),
+            lg("run.csv", &clock(0..2000), &train),
+            lg("tail.csv", &clock(0..500), &view(&run, 1500..2000)),
         )
         .unwrap_err()
         .to_string();
@@ -1388,12 +1373,8 @@ mod tests {
             m[..100].copy_from_slice(&r[1900..]);
         }
         let e = check_unseen(
-            "run.csv",
-            &clock(0..2000),
-            &train,
-            "next.csv",
-            &clock(0..500),
-            &view(&more, 0..500),
+            lg("run.csv", &clock(0..2000), &train),
+            lg("next.csv", &clock(0..500), &view(&more, 0..500)),
         )
         .unwrap_err()
         .to_string();
@@ -1409,30 +1390,30 @@ mod tests {
         // but not ten changing rows at one offset
         let (a, b) = (logged(1, 2000), logged(2, 2000));
         let run = view(&a, 0..2000);
-        assert!(check_shared("run.csv", &run, "other.csv", &view(&b, 0..2000)).is_ok());
+        assert!(check_shared(
+            lg("run.csv", &[], &run),
+            lg("other.csv", &[], &view(&b, 0..2000))
+        )
+        .is_ok());
         // an idle machine: every row alike in both
         let idle: Vec<Vec<f64>> = (0..4).map(|c| vec![20.0 + c as f64; 500]).collect();
         let still = view(&idle, 0..500);
         let t = clock(0..500);
-        assert!(check_unseen("idle.csv", &t, &still, "idle2.csv", &t, &still).is_ok());
+        assert!(check_unseen(lg("idle.csv", &t, &still), lg("idle2.csv", &t, &still)).is_ok());
         // fewer changing rows than the floor, or other columns: nothing to say
         assert!(check_unseen(
-            "run.csv",
-            &clock(0..2000),
-            &run,
-            "short.csv",
-            &clock(0..SHARED_ROWS_MIN - 1),
-            &view(&a, 0..SHARED_ROWS_MIN - 1)
+            lg("run.csv", &clock(0..2000), &run),
+            lg(
+                "short.csv",
+                &clock(0..SHARED_ROWS_MIN - 1),
+                &view(&a, 0..SHARED_ROWS_MIN - 1)
+            )
         )
         .is_ok());
         let few = &view(&a, 0..2000)[..3];
         assert!(check_unseen(
-            "run.csv",
-            &clock(0..2000),
-            &run,
-            "few.csv",
-            &clock(0..2000),
-            few
+            lg("run.csv", &clock(0..2000), &run),
+            lg("few.csv", &clock(0..2000), few)
         )
         .is_ok());
     }
@@ -1453,24 +1434,16 @@ mod tests {
         let shifted: Vec<f64> = t.iter().map(|x| x + 7.5).collect();
         for other in [&t, &shifted] {
             assert!(check_unseen(
-                "run.csv",
-                &t,
-                &view(&a, 0..2000),
-                "other.csv",
-                other,
-                &view(&b, 0..2000)
+                lg("run.csv", &t, &view(&a, 0..2000)),
+                lg("other.csv", other, &view(&b, 0..2000))
             )
             .is_ok());
         }
         // with the very drift, the runs are one log's rows to this check: refused
         let b2 = logged(2, 2000);
         assert!(check_unseen(
-            "run.csv",
-            &t,
-            &view(&a, 0..2000),
-            "other.csv",
-            &shifted,
-            &view(&b2, 0..2000)
+            lg("run.csv", &t, &view(&a, 0..2000)),
+            lg("other.csv", &shifted, &view(&b2, 0..2000))
         )
         .is_err());
     }

@@ -165,7 +165,19 @@ fn check_unseen(
     crate::detach_short(py, || {
         let tc: Vec<&[f64]> = t.iter().map(Vec::as_slice).collect();
         let hc: Vec<&[f64]> = h.iter().map(Vec::as_slice).collect();
-        thermerr_core::run::check_unseen(train_source, &tt, &tc, held_source, &ht, &hc)
+        use thermerr_core::run::{check_unseen, Logged};
+        check_unseen(
+            Logged {
+                source: train_source,
+                time: &tt,
+                cols: &tc,
+            },
+            Logged {
+                source: held_source,
+                time: &ht,
+                cols: &hc,
+            },
+        )
     })
 }
 
