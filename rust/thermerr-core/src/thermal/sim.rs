@@ -388,10 +388,34 @@ impl Thinned {
 
 pub use crate::timeaxis::median_step;
 
-/// Distinct step lengths whose transition matrices are kept at once.
+/// Distinct step lengths whose transition matrices are kept at once when each is built on
+/// demand (by its own series).
 const MAX_STEP_LENGTHS: usize = 1024;
 /// Widest range of step lengths (in grid steps) whose matrices are built by products.
 const CHAIN_SPAN: i64 = 4096;
+/// The n × n products of one transition by its own series (20 terms and a few doublings): a
+/// chain of products (two per grid step of the range) builds the distinct step lengths only
+/// when it takes fewer. A log with a few rows dropped has a few lengths far apart (60, 75, 90,
+/// 105 s thinned from 15 s: 1 440 grid steps), where the chain took 2 880 products per
+/// simulation against 4 series; a jittering logger has hundreds close together, where it pays.
+const SERIES_PRODUCTS: i64 = 30;
+/// Values (f64) of the transitions a chain keeps at once: the chain builds every distinct length
+/// of the run in one go, however many there are (a jittering logger's thousands).
+const MAX_CHAIN_VALUES: usize = 1 << 22;
+
+/// Whether the distinct step lengths `steps` (grid steps, ascending) of an `nd`-node network are
+/// built by a chain of products rather than each by its own series: more than two, within
+/// [`CHAIN_SPAN`], fewer products than the series take ([`SERIES_PRODUCTS`]), and all kept at
+/// once within [`MAX_CHAIN_VALUES`].
+fn chain_pays(steps: &[i64], nd: usize) -> bool {
+    let (Some(&lo), Some(&hi)) = (steps.first(), steps.last()) else {
+        return false;
+    };
+    steps.len() > 2
+        && hi - lo <= CHAIN_SPAN
+        && 2 * (hi - lo) < SERIES_PRODUCTS * steps.len() as i64
+        && steps.len() * 2 * nd * nd <= MAX_CHAIN_VALUES
+}
 
 /// The time axis on a grid of `q` seconds, a power of two near 1/1000 of the mean step.
 ///
@@ -531,7 +555,7 @@ pub fn simulate_nodes_on(
         // instead of one series each
         let (steps, q) = (&steps.distinct, steps.q);
         if let (Some(&lo), Some(&hi)) = (steps.first(), steps.last()) {
-            if steps.len() > 2 && steps.len() <= MAX_STEP_LENGTHS && hi - lo <= CHAIN_SPAN {
+            if chain_pays(steps, nd) {
                 let eq = Transition::of(&mflat, nd, q);
                 let mut e = Transition::of(&mflat, nd, lo as f64 * q);
                 let mut want = steps.iter().peekable();
@@ -808,6 +832,7 @@ impl March<'_> {
     fn load(&mut self, steps: i64, nd: usize, phi: &mut [f64], w: &mut [f64]) {
         if !self.cache.contains_key(&steps) {
             let t = Transition::of(self.m, self.nd, steps as f64 * self.q);
+            // built on demand (a chain builds all at once): at most so many kept
             if self.cache.len() >= MAX_STEP_LENGTHS {
                 self.cache.clear();
             }
@@ -978,4 +1003,28 @@ pub fn lag(t: &[f64], y: &[f64], tau: f64) -> Vec<f64> {
         z.push(a * prev + (1.0 - a) * y[k - 1] + w * (y[k] - y[k - 1]));
     }
     z
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_chain_builds_the_step_lengths_only_where_it_takes_fewer_products() {
+        // 15-s rows thinned to 60 s with a few rows dropped: 60, 75, 90, 105 s on a 1/32-s
+        // grid, four lengths 1 440 grid steps apart: each by its own series
+        let q = 1.0 / 32.0;
+        let dropped: Vec<i64> = [60.0, 75.0, 90.0, 105.0]
+            .iter()
+            .map(|s| (s / q) as i64)
+            .collect();
+        assert!(!chain_pays(&dropped, 5));
+        // a logger jittering by up to ±2 s on 60 s: 129 lengths within 256 grid steps
+        let jitter: Vec<i64> = (-64..=64).map(|k| (60.0 / q) as i64 + 2 * k).collect();
+        assert!(chain_pays(&jitter, 5));
+        // two lengths, or one: their series
+        assert!(!chain_pays(&jitter[..2], 5) && !chain_pays(&[1920], 5));
+        // the same lengths held at once for a network too large to keep them all: each on demand
+        assert!(!chain_pays(&jitter, 200));
+    }
 }
