@@ -552,10 +552,10 @@ const SHARED_OFFSETS_TRIED: usize = 4;
 /// column both runs have exactly as a stretch of the training run's (a piece cut from the
 /// training log, its clock kept or restarted). Its "held-out" figures would be scored on rows
 /// the fit trains on, and, taken as a run of its own from its first readings, scored wrongly
-/// besides. Both runs' `cols` are the same columns, in one order ([`Logged`]). Two runs of one machine on a coarse logger
-/// pass through the same readings, but not row after row for ten changes; a piece cut out and
-/// resampled is not recognised. Then [`check_interleaved`]. One line naming the held-out file,
-/// its rows and the training run's.
+/// besides. Both runs' `cols` are the same columns, in one order ([`Logged`]). Two runs of one
+/// machine on a coarse logger pass through the same readings, but not row after row for ten
+/// changes; a piece cut out and resampled is not recognised. Then [`check_interleaved`]. One
+/// line naming the held-out file, its rows and the training run's.
 pub fn check_unseen(train: Logged<'_>, held: Logged<'_>) -> Result<()> {
     check_shared(train, held)?;
     check_interleaved(train, held)
@@ -589,6 +589,11 @@ fn check_interleaved(tr: Logged<'_>, ho: Logged<'_>) -> Result<()> {
     if train.is_empty() || train.len() != held.len() || nt < 2 || nh < SHARED_ROWS_MIN {
         return Ok(());
     }
+    let Some(step) = crate::timeaxis::median_step(train_time) else {
+        return Ok(());
+    };
+    // a column's typical step: the median change between consecutive rows that change (a
+    // logger's resolution where most rows repeat)
     let median = |mut v: Vec<f64>| -> f64 {
         v.retain(|x| x.is_finite());
         if v.is_empty() {
@@ -597,12 +602,6 @@ fn check_interleaved(tr: Logged<'_>, ho: Logged<'_>) -> Result<()> {
         let k = v.len() / 2;
         *v.select_nth_unstable_by(k, f64::total_cmp).1
     };
-    let step = median(train_time.windows(2).map(|w| w[1] - w[0]).collect());
-    if step <= 0.0 {
-        return Ok(());
-    }
-    // a column's typical step: the median change between consecutive rows that change (a
-    // logger's resolution where most rows repeat)
     let typical: Vec<f64> = train
         .iter()
         .map(|c| {

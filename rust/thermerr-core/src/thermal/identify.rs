@@ -80,8 +80,8 @@
 //!    the calibrated network's slowest node ([`UNSENSED_CAPACITY`] times its capacity, its
 //!    ambient conductance to the room and as the link, no drift term) and the whole network is
 //!    calibrated again from there, within a diagnosis's bounds and prior (a factor 3, a factor 2
-//!    as one σ: the step refines a calibrated network and a physical guess). It is kept when the training fit's BIC falls (its three
-//!    values pay for themselves) and its calibrated time constant is no longer than the
+//!    as one σ: the step refines a calibrated network and a physical guess). It is kept when
+//!    the training fit's BIC falls (its three values pay for themselves) and its calibrated time constant is no longer than the
 //!    training rows (the run shows it settle; a longer one cannot be told from a part held at
 //!    its start). Clustering makes one node per group of sensors, so without it the sensed
 //!    nodes read the heat they lose into such a part as their own capacities and losses; on the
@@ -2510,8 +2510,9 @@ pub struct UnsensedMass {
 /// that starts from the calibrated network and a physical guess (the unsensed node), so that it
 /// refines them rather than identifying the network again. With the factor 10 the unsensed node
 /// of the synthetic VMC calibrated on 5.6 h of training rows wandered to τ = 13.5 h (the true
-/// bed's is 2.6 h, the guess 1.7 h; refined, 3.1 h) and was not kept; on the 8-h runs of the identified rate
-/// sweep (seeds 1-16) the diagnosis then named 121/160 right, 128/160 with these bounds.
+/// bed's is 2.6 h, the guess 1.7 h; refined, 3.1 h) and was not kept; on the 8-h runs of the
+/// identified rate sweep (seeds 1-16) the diagnosis then named 121/160 right, 128/160 with
+/// these bounds.
 fn refining(opts: &CalibrationOptions) -> CalibrationOptions {
     let diagnosis = CalibrationOptions::default();
     CalibrationOptions {
@@ -2524,11 +2525,11 @@ fn refining(opts: &CalibrationOptions) -> CalibrationOptions {
 /// The calibrated network `cal` with an unsensed node behind its slowest simulated node (the
 /// largest C / (G_ambient + links)): a capacity of [`UNSENSED_CAPACITY`] times that node's,
 /// that node's ambient conductance to the room and as its link, no drift term, calibrated from
-/// there with the rest (`opts`, but with a diagnosis's bounds and prior, [`refining`]); kept when the training fit's BIC falls (its normalised SSR by
-/// more than 3·ln n, n the fitted residuals: its three values pay for themselves) and its
-/// calibrated time constant is at most `span` (s, the training rows). Returns the network to go
-/// on with and what was tried: the node, the note to say, the link's note when kept (None: no
-/// simulated node to link it to).
+/// there with the rest (`opts`, but with a diagnosis's bounds and prior, [`refining`]); kept
+/// when the training fit's BIC falls (its normalised SSR by more than 3·ln n, n the fitted
+/// residuals: its three values pay for themselves) and its calibrated time constant is at most
+/// `span` (s, the training rows). Returns the network to go on with and what was tried: the
+/// node, the note to say, the link's note when kept (None: no simulated node to link it to).
 fn with_unsensed_mass(
     cal: Calibration,
     view: &RunView<'_>,
