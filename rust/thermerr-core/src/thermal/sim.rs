@@ -423,7 +423,9 @@ fn chain_pays(steps: &[i64], nd: usize) -> bool {
 /// 60-s samples) would make every step distinct. On the grid, a run on whole (or binary-fraction)
 /// seconds keeps its exact steps, and a jittered one has a few dozen distinct step lengths; each
 /// time moves by at most q/2 (30 ms at 60-s sampling) and the moves do not accumulate, because
-/// the times are rounded, not the steps.
+/// the times are rounded, not the steps. A logger whose stamps spread wider (15-s samples
+/// anywhere from 11 to 19 s apart: a thousand lengths on the 1/128-s grid, each simulation
+/// then building a thousand transitions) is put on a coarser grid, see [`Steps::of`].
 struct Ticks {
     q: f64,
 }
@@ -449,7 +451,25 @@ impl Ticks {
     fn at(&self, t: f64) -> i64 {
         (t / self.q).round() as i64
     }
+
+    /// Each step of `t` in ticks and the distinct lengths, ascending.
+    fn steps(&self, t: &[f64]) -> (Vec<i64>, Vec<i64>) {
+        let at: Vec<i64> = t.iter().map(|&v| self.at(v)).collect();
+        let dt: Vec<i64> = at.windows(2).map(|w| w[1] - w[0]).collect();
+        let mut distinct = dt.clone();
+        distinct.dedup(); // a logger's steps repeat: the sort below sees a handful of values
+        distinct.sort_unstable();
+        distinct.dedup();
+        (dt, distinct)
+    }
 }
+
+/// Distinct step lengths on the grid above which it is made coarser (a widely jittering
+/// logger), by doublings: at most [`MAX_COARSENING`] of them, and never past one second.
+const MAX_GRID_LENGTHS: usize = 128;
+/// At most 2³: the coarsest grid is about 1/128 of the mean step, so a time moves by at most
+/// 1/256 of a step (59 ms at 15 s), where a thermal network's fastest node takes minutes.
+const MAX_COARSENING: u32 = 3;
 
 /// Simulates the machine over the run's time axis and inputs.
 pub fn simulate(mach: &Machine, run: &RunView<'_>, init: &Init) -> Result<Simulation> {
@@ -465,21 +485,34 @@ pub struct Steps {
     dt: Vec<i64>,
     /// the distinct step lengths, ascending
     distinct: Vec<i64>,
+    /// each step's place in `distinct` (a simulation looks its matrices up by it)
+    kind: Vec<u32>,
 }
 
 impl Steps {
+    /// The steps of the times `t` on the grid of [`Ticks`]: made coarser (doubled, at most
+    /// [`MAX_COARSENING`] times, never past one second, so that whole seconds stay exact) while
+    /// the steps take more than [`MAX_GRID_LENGTHS`] distinct lengths. A run on whole seconds,
+    /// or a few lengths (rows dropped), keeps its grid and its exact steps.
     pub fn of(t: &[f64]) -> Steps {
-        let ticks = Ticks::new(t);
-        let at: Vec<i64> = t.iter().map(|&v| ticks.at(v)).collect();
-        let dt: Vec<i64> = at.windows(2).map(|w| w[1] - w[0]).collect();
-        let mut distinct = dt.clone();
-        distinct.dedup(); // a logger's steps repeat: the sort below sees a handful of values
-        distinct.sort_unstable();
-        distinct.dedup();
+        let mut ticks = Ticks::new(t);
+        let (mut dt, mut distinct) = ticks.steps(t);
+        for _ in 0..MAX_COARSENING {
+            if distinct.len() <= MAX_GRID_LENGTHS || 2.0 * ticks.q > 1.0 {
+                break;
+            }
+            ticks.q *= 2.0;
+            (dt, distinct) = ticks.steps(t);
+        }
+        let kind = dt
+            .iter()
+            .map(|d| distinct.binary_search(d).unwrap_or(0) as u32)
+            .collect();
         Steps {
             q: ticks.q,
             dt,
             distinct,
+            kind,
         }
     }
 }
@@ -545,9 +578,8 @@ pub fn simulate_nodes_on(
         x.push(v);
     }
     let mut out = vec![0.0; n_t * nn];
-    let dt = &steps.dt;
     let mflat: Vec<f64> = (0..nd * nd).map(|i| net.m[(i / nd, i % nd)]).collect();
-    let mut cache: HashMap<i64, Transition> = HashMap::new();
+    let mut chained: Vec<(usize, Transition)> = Vec::new();
     {
         // many distinct step lengths close together (a jittering logger): a step of (m+1)
         // ticks is one of m ticks followed by one of one tick, so one transition for the
@@ -558,17 +590,17 @@ pub fn simulate_nodes_on(
             if chain_pays(steps, nd) {
                 let eq = Transition::of(&mflat, nd, q);
                 let mut e = Transition::of(&mflat, nd, lo as f64 * q);
-                let mut want = steps.iter().peekable();
+                let mut want = steps.iter().enumerate().peekable();
                 for m in lo..=hi {
+                    let wanted = want.next_if(|&(_, &w)| w == m).map(|(i, _)| i);
                     if m < hi {
                         let next = e.then(&eq, nd);
-                        if want.peek() == Some(&&m) {
-                            cache.insert(m, e);
-                            want.next();
+                        if let Some(i) = wanted {
+                            chained.push((i, e));
                         }
                         e = next;
-                    } else if want.peek() == Some(&&m) {
-                        cache.insert(m, e);
+                    } else if let Some(i) = wanted {
+                        chained.push((i, e));
                         break;
                     }
                 }
@@ -625,11 +657,14 @@ pub fn simulate_nodes_on(
         bnd: &bnd,
         b_in: &b_in,
         drv: &drv,
-        dt,
-        cache,
+        steps,
+        table: vec![None; steps.distinct.len()],
+        built: 0,
         m: &mflat,
-        q: steps.q,
     };
+    for (i, t) in chained {
+        march.table[i] = Some(march.entry(&t));
+    }
     match nd {
         1 => march.run_n::<1>(&mut x, &mut out)?,
         2 => march.run_n::<2>(&mut x, &mut out)?,
@@ -734,11 +769,14 @@ struct March<'s> {
     b_in: &'s [f64],
     /// n_t × nv, row-major: the drivers of each step
     drv: &'s [f64],
-    dt: &'s [i64],
-    cache: HashMap<i64, Transition>,
+    steps: &'s Steps,
+    /// per distinct step length (`steps.distinct`): Φ (nd × nd) then Γ·B (nd × nv), row-major,
+    /// once built (all at once by a chain, or each on demand)
+    table: Vec<Option<Box<[f64]>>>,
+    /// entries built on demand and kept (at most [`MAX_STEP_LENGTHS`])
+    built: usize,
     /// the network's matrix M (nd × nd, row-major)
     m: &'s [f64],
-    q: f64,
 }
 
 impl March<'_> {
@@ -765,8 +803,6 @@ impl March<'_> {
         let nv = if V > 0 { V } else { self.nv };
         let nn = self.nn;
         let n_t = out.len() / nn;
-        let mut phi = vec![0.0; nd * nd];
-        let mut w = vec![0.0; nd * nv];
         // the state and the next state on the stack for a small network (the loop below then
         // keeps them in registers), on the heap for a large one
         let mut small = [[0.0; 8]; 2];
@@ -789,7 +825,6 @@ impl March<'_> {
             .enumerate()
             .filter_map(|(i, b)| b.map(|c| (i, c)))
             .collect();
-        let mut cur_steps: Option<i64> = None;
         for k in 0..n_t {
             let row = &mut out[k * nn..(k + 1) * nn];
             for (&i, &v) in self.dyn_nodes.iter().zip(xs.iter()) {
@@ -804,11 +839,17 @@ impl March<'_> {
             if k % 1024 == 0 {
                 crate::interrupt::check()?;
             }
-            let steps = self.dt[k];
-            if cur_steps != Some(steps) {
-                self.load(steps, nd, &mut phi, &mut w);
-                cur_steps = Some(steps);
+            let kind = self.steps.kind[k] as usize;
+            if self.table[kind].is_none() {
+                self.build(kind);
             }
+            let Some(entry) = &self.table[kind] else {
+                return Err(Error::Numerical(format!(
+                    "no transition for a step of {} ticks",
+                    self.steps.dt[k]
+                )));
+            };
+            let (phi, w) = entry.split_at(nd * nd);
             let d = &self.drv[k * nv..(k + 1) * nv];
             for p in 0..nd {
                 let pr = &phi[p * nd..(p + 1) * nd];
@@ -828,26 +869,34 @@ impl March<'_> {
         Ok(())
     }
 
-    /// Φ and Γ·B of a step of `steps` ticks into `phi` (nd × nd) and `w` (nd × nv).
-    fn load(&mut self, steps: i64, nd: usize, phi: &mut [f64], w: &mut [f64]) {
-        if !self.cache.contains_key(&steps) {
-            let t = Transition::of(self.m, self.nd, steps as f64 * self.q);
-            // built on demand (a chain builds all at once): at most so many kept
-            if self.cache.len() >= MAX_STEP_LENGTHS {
-                self.cache.clear();
-            }
-            self.cache.insert(steps, t);
+    /// Builds the table's entry `kind` on demand (by its own series); at most
+    /// [`MAX_STEP_LENGTHS`] kept at once.
+    fn build(&mut self, kind: usize) {
+        if self.built >= MAX_STEP_LENGTHS {
+            self.table.iter_mut().for_each(|e| *e = None);
+            self.built = 0;
         }
-        let t = &self.cache[&steps];
-        let nv = self.nv;
-        phi.copy_from_slice(&t.phi);
+        let h = self.steps.distinct[kind] as f64 * self.steps.q;
+        let t = Transition::of(self.m, self.nd, h);
+        self.table[kind] = Some(self.entry(&t));
+        self.built += 1;
+    }
+
+    /// Φ then Γ·B of the transition `t`, as one entry of the table.
+    fn entry(&self, t: &Transition) -> Box<[f64]> {
+        let (nd, nv) = (self.nd, self.nv);
+        let mut e = Vec::with_capacity(nd * (nd + nv));
+        e.extend_from_slice(&t.phi);
         for p in 0..nd {
             for v in 0..nv {
-                w[p * nv + v] = (0..nd)
-                    .map(|q| t.gam[p * nd + q] * self.b_in[q * nv + v])
-                    .sum();
+                e.push(
+                    (0..nd)
+                        .map(|q| t.gam[p * nd + q] * self.b_in[q * nv + v])
+                        .sum(),
+                );
             }
         }
+        e.into_boxed_slice()
     }
 }
 
@@ -1026,5 +1075,50 @@ mod tests {
         assert!(!chain_pays(&jitter[..2], 5) && !chain_pays(&[1920], 5));
         // the same lengths held at once for a network too large to keep them all: each on demand
         assert!(!chain_pays(&jitter, 200));
+    }
+
+    #[test]
+    fn a_widely_jittering_logger_is_put_on_a_coarser_grid_and_whole_seconds_stay_exact() {
+        // 15-s samples stamped anywhere from 11 to 19 s apart (in ms): ~1 000 lengths on the
+        // 1/128-s grid; two doublings (1/32 s, ~250 lengths) are not enough, the third is
+        let t: Vec<f64> = (0..2000)
+            .map(|k| k as f64 * 15.0 + (2.0 * (2.3 * k as f64).sin() * 1000.0).round() / 1000.0)
+            .collect();
+        let s = Steps::of(&t);
+        assert_eq!(s.q, 1.0 / 16.0);
+        assert!(s.distinct.len() <= MAX_GRID_LENGTHS, "{}", s.distinct.len());
+        // each time moves by at most half a tick, and the moves do not accumulate
+        let mut at = t[0] / s.q;
+        for (k, d) in s.dt.iter().enumerate() {
+            at += *d as f64;
+            assert!(
+                (at * s.q - t[k + 1]).abs() <= s.q / 2.0 + 1e-9,
+                "row {}",
+                k + 1
+            );
+        }
+        // every step finds its length
+        for (d, &i) in s.dt.iter().zip(&s.kind) {
+            assert_eq!(s.distinct[i as usize], *d);
+        }
+        // whole seconds, hundreds of lengths (a logger writing on change): coarser, not past 1 s,
+        // every step exact
+        let mut t = vec![0.0];
+        for k in 1..3000_i64 {
+            t.push(t[k as usize - 1] + (1 + (k * 7919) % 400) as f64);
+        }
+        let s = Steps::of(&t);
+        assert!(s.q <= 1.0);
+        for (k, d) in s.dt.iter().enumerate() {
+            assert_eq!(*d as f64 * s.q, t[k + 1] - t[k], "row {}", k + 1);
+        }
+        // a 15-s log with rows dropped: a few lengths, the grid of the mean step as before
+        let t: Vec<f64> = (0..2000_i64)
+            .filter(|k| k % 7 != 3)
+            .map(|k| k as f64 * 15.0)
+            .collect();
+        let s = Steps::of(&t);
+        assert_eq!(s.q, 1.0 / 64.0);
+        assert_eq!(s.distinct, vec![960, 1920]);
     }
 }
