@@ -591,3 +591,59 @@ fn a_thinned_run_keeps_the_heat_of_an_input_that_changes_between_its_rows() {
         assert_relative_eq!(a.temps[i], b.temps[4 * i], epsilon = 1e-9);
     }
 }
+
+#[test]
+fn an_unsensed_node_of_a_run_starting_warm_is_started_from_the_first_hour_when_the_file_says_fit() {
+    // a second run of the day: the part no sensor reads ("cold") starts 6 K above the room,
+    // the sensed one at 30 °C; its readings are the network's own (no noise)
+    let truth = Machine::from_toml(TWO_NODES, "two.toml").unwrap();
+    let t: Vec<f64> = (0..481).map(|k| k as f64 * 60.0).collect();
+    let rpm: Vec<f64> = (0..481)
+        .map(|k| [0.0, 3000.0, 6000.0][(k / 60) % 3])
+        .collect();
+    let n = t.len();
+    let mut hot = vec![30.0; n];
+    let blank = |hot: Vec<f64>| {
+        run(vec![
+            ("time_s", t.clone()),
+            ("T_hot", hot),
+            ("U_rpm", rpm.clone()),
+            ("E_x", vec![0.0; n]),
+        ])
+    };
+    let warm = simulate(
+        &truth,
+        &RunView::new(&blank(hot.clone())),
+        &Init::Offsets(vec![0.0, 6.0]),
+    )
+    .unwrap();
+    for (k, h) in hot.iter_mut().enumerate() {
+        *h = warm.temps[2 * k];
+    }
+    let r = blank(hot);
+    let fit = Machine::from_toml(
+        &TWO_NODES.replace(
+            "ambient = 21.0\n",
+            "ambient = 21.0\nunsensed_start = \"fit\"\n",
+        ),
+        "two.toml",
+    )
+    .unwrap();
+    let s = simulate(&fit, &RunView::new(&r), &Init::FirstReading).unwrap();
+    // the start is recovered (the hour's readings determine it: the network is linear in it)
+    assert_relative_eq!(s.temps[1], 27.0, epsilon = 1e-6);
+    let worst = |a: &[f64]| {
+        a.iter()
+            .zip(&warm.drift[0].1)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max)
+    };
+    assert!(worst(&s.drift[0].1) < 1e-5, "{}", worst(&s.drift[0].1));
+    // the default (formats.md) starts it at the room, 6 K low: µm off
+    let room = simulate(&truth, &RunView::new(&r), &Init::FirstReading).unwrap();
+    assert_eq!(room.temps[1], 21.0);
+    assert!(worst(&room.drift[0].1) > 1.0, "{}", worst(&room.drift[0].1));
+    // and the file keeps the choice
+    assert!(fit.to_toml().unwrap().contains("unsensed_start = \"fit\""));
+    assert!(!truth.to_toml().unwrap().contains("unsensed_start"));
+}

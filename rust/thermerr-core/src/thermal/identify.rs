@@ -1897,6 +1897,7 @@ pub fn identify(
         let start_machine = Machine {
             name: format!("identified-{stem}"),
             ambient: Ambient::Column(ambient.column.clone()),
+            unsensed_start: Default::default(),
             nodes: nodes.clone(),
             links,
             sources: sources.clone(),
@@ -2605,7 +2606,8 @@ fn with_unsensed_mass(
          the mass behind them, which a network of sensed nodes alone reads as their own \
          capacities and losses; it lowers the normalised training SSR from {:.4e} to {:.4e} \
          (more than its three values cost in BIC). \
-         It starts at the room's first reading, as every unsensed node does (formats.md)",
+         It starts at the room's first reading, as every unsensed node does (formats.md; \
+         `unsensed_start = \"fit\"` in the file fits its start to the run's first hour)",
         of.name, cal.ssr, c.ssr
     );
     let link = format!(
@@ -2829,7 +2831,7 @@ fn commented_toml(id: &Identification) -> Result<String> {
                 nd.name
             ),
             None => format!(
-                "# {}: a part no sensor reads, behind {} (the slowest node), linked to it and the room; no drift term; starts at the room's first reading",
+                "# {}: a part no sensor reads, behind {} (the slowest node), linked to it and the room; no drift term; starts at the room's first reading (a line `unsensed_start = \"fit\"` under `ambient` starts it from the run's first hour instead: for a run that starts warm)",
                 nd.name,
                 id.unsensed.as_ref().map_or("", |u| u.linked_to.as_str())
             ),

@@ -30,6 +30,28 @@ fn one() -> f64 {
     1.0
 }
 
+/// Where a node whose start no reading gives (no sensor, or a sensor dead from the first row)
+/// starts a run (the machine file's `unsensed_start`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum UnsensedStart {
+    /// At the room's first reading (formats.md): right for a run that starts cold, a machine
+    /// that stood overnight.
+    #[default]
+    Room,
+    /// Fitted to the run's first hour: the start that makes the sensed nodes follow their
+    /// readings best (least squares; the network is linear in its start), within the range
+    /// of the room's and the sensors' first readings. A second run of the day starts warm, its
+    /// unsensed parts too, and the sensed parts' first hour shows how warm.
+    Fit,
+}
+
+impl UnsensedStart {
+    pub fn is_room(&self) -> bool {
+        *self == UnsensedStart::Room
+    }
+}
+
 /// The ambient: a run column, or a constant in °C.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
@@ -132,6 +154,10 @@ pub struct DriftSpec {
 pub struct Machine {
     pub name: String,
     pub ambient: Ambient,
+    /// How a node no reading starts begins a run: at the room's first reading (formats.md, the
+    /// default) or fitted to the run's first hour (`unsensed_start = "fit"`).
+    #[serde(default, skip_serializing_if = "UnsensedStart::is_room")]
+    pub unsensed_start: UnsensedStart,
     pub nodes: Vec<NodeSpec>,
     #[serde(default)]
     pub links: Vec<LinkSpec>,

@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex};
 
 use nalgebra::DMatrix;
 
-use super::machine::{Ambient, DriftSpec, Machine};
+use super::machine::{Ambient, DriftSpec, Machine, UnsensedStart};
 use crate::error::{Error, Result};
 use crate::portable;
 use crate::run::Run;
@@ -563,14 +563,22 @@ pub fn simulate_nodes_on(
         })
         .collect::<Result<_>>()?;
     let mut x: Vec<f64> = Vec::with_capacity(nd);
-    for &i in &net.dyn_nodes {
+    // the positions whose start no reading gives
+    let mut unread: Vec<usize> = Vec::new();
+    for (p, &i) in net.dyn_nodes.iter().enumerate() {
         let node = &mach.nodes[i];
         let mut v = match &node.sensor {
             // a sensor dead from the first row tells nothing of the node's start: the node
-            // starts as an unsensed one, at the room's first reading
-            Some(c) if run.failing(c)?.first().is_some_and(|r| r.start == 0) => amb[0],
+            // starts as an unsensed one
+            Some(c) if run.failing(c)?.first().is_some_and(|r| r.start == 0) => {
+                unread.push(p);
+                amb[0]
+            }
             Some(c) => run.col(c)?[0] - node.sensor_offset_k,
-            None => amb[0],
+            None => {
+                unread.push(p);
+                amb[0]
+            }
         };
         if let Init::Offsets(off) = init {
             v += off.get(i).copied().unwrap_or(0.0);
@@ -665,6 +673,26 @@ pub fn simulate_nodes_on(
     for (i, t) in chained {
         march.table[i] = Some(march.entry(&t));
     }
+    if mach.unsensed_start == UnsensedStart::Fit && !unread.is_empty() {
+        let mut read = Vec::new();
+        for (p, &i) in net.dyn_nodes.iter().enumerate() {
+            let node = &mach.nodes[i];
+            if let (Some(c), false) = (&node.sensor, unread.contains(&p)) {
+                read.push(Reading {
+                    node: i,
+                    col: run.col(c)?,
+                    failing: run.failing(c)?,
+                    offset_k: node.sensor_offset_k,
+                    drift_k_per_h: node.sensor_drift_k_per_h,
+                });
+            }
+        }
+        let low = read.iter().map(|r| r.col[0]).fold(amb[0], f64::min);
+        let high = read.iter().map(|r| r.col[0]).fold(amb[0], f64::max);
+        for (p, v) in fitted_start(&mut march, &x, &unread, &read, run.time)? {
+            x[p] = v.clamp(low, high);
+        }
+    }
     match nd {
         1 => march.run_n::<1>(&mut x, &mut out)?,
         2 => march.run_n::<2>(&mut x, &mut out)?,
@@ -682,6 +710,80 @@ pub fn simulate_nodes_on(
         ));
     }
     Ok(out)
+}
+
+/// The rows a fitted start reads ([`UnsensedStart::Fit`]): the run's first hour.
+pub const START_FIT_S: f64 = 3600.0;
+
+/// A sensed node's readings, for [`fitted_start`].
+struct Reading<'a> {
+    node: usize,
+    col: &'a [f64],
+    failing: Failing,
+    offset_k: f64,
+    drift_k_per_h: f64,
+}
+
+/// The starts of the nodes at positions `unread` (no reading gives them) that make the sensed
+/// nodes `read` follow their readings best over the run's first [`START_FIT_S`] (least squares:
+/// the network is linear in its start), each as (position, start). The other nodes start at
+/// `x`. Nothing when the window holds fewer than three rows or no sensed node; a node the sensed
+/// ones do not feel at all keeps its start (the least squares' minimum-norm solution).
+fn fitted_start(
+    march: &mut March<'_>,
+    x: &[f64],
+    unread: &[usize],
+    read: &[Reading<'_>],
+    t: &[f64],
+) -> Result<Vec<(usize, f64)>> {
+    let w = t.iter().take_while(|&&v| v - t[0] <= START_FIT_S).count();
+    if w < 3 || read.is_empty() {
+        return Ok(Vec::new());
+    }
+    let nn = march.nn;
+    let sim = |march: &mut March<'_>, x0: &[f64]| -> Result<Vec<f64>> {
+        let (mut xs, mut out) = (x0.to_vec(), vec![0.0; w * nn]);
+        march.run_n::<0>(&mut xs, &mut out)?;
+        Ok(out)
+    };
+    let base = sim(march, x)?;
+    let rows: Vec<(usize, usize)> = read
+        .iter()
+        .enumerate()
+        .flat_map(|(j, r)| {
+            (0..w)
+                .filter(|&k| !r.failing.iter().any(|f| f.contains(&k)))
+                .map(move |k| (j, k))
+        })
+        .collect();
+    let mut cols = Vec::with_capacity(unread.len());
+    for &u in unread {
+        let mut xu = x.to_vec();
+        xu[u] += 1.0;
+        let resp = sim(march, &xu)?;
+        cols.push(
+            rows.iter()
+                .map(|&(j, k)| resp[k * nn + read[j].node] - base[k * nn + read[j].node])
+                .collect::<Vec<f64>>(),
+        );
+    }
+    let target: Vec<f64> = rows
+        .iter()
+        .map(|&(j, k)| {
+            let r = &read[j];
+            r.col[k] - r.offset_k - r.drift_k_per_h * (t[k] - t[0]) / 3600.0 - base[k * nn + r.node]
+        })
+        .collect();
+    let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+    let Ok(a) = crate::linalg::lstsq_columns(&refs, &target) else {
+        return Ok(Vec::new());
+    };
+    Ok(unread
+        .iter()
+        .zip(a)
+        .filter(|(_, v)| v.is_finite())
+        .map(|(&u, v)| (u, x[u] + v))
+        .collect())
 }
 
 /// One step of the network: Φ = e^{Mh} and Γ = ∫₀ʰ e^{Ms} ds (n × n, row-major), so that
