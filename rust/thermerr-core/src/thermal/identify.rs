@@ -305,10 +305,10 @@ fn lowpass(t: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
 }
 
 /// Least squares without intercept; returns the coefficients and the residual sum of squares.
-fn fit(basis: &[Vec<f64>], y: &[f64]) -> Result<(Vec<f64>, f64)> {
+fn fit<C: AsRef<[f64]>>(basis: &[C], y: &[f64]) -> Result<(Vec<f64>, f64)> {
     // the search's building block, thousands of times on a long run: Ctrl-C is seen here
     crate::interrupt::check()?;
-    let cols: Vec<&[f64]> = basis.iter().map(Vec::as_slice).collect();
+    let cols: Vec<&[f64]> = basis.iter().map(AsRef::as_ref).collect();
     let c = lstsq_columns(&cols, y)?;
     let ssr = misfit(basis, &c, y);
     Ok((c, ssr))
@@ -425,10 +425,10 @@ fn unit_scale(c: &mut [f64]) -> f64 {
 }
 
 /// The squared misfit ‖Σ x_j c_j − y‖² of coefficients `x` on columns `cols`.
-fn misfit(cols: &[Vec<f64>], x: &[f64], y: &[f64]) -> f64 {
+fn misfit<C: AsRef<[f64]>>(cols: &[C], x: &[f64], y: &[f64]) -> f64 {
     (0..y.len())
         .map(|r| {
-            let p: f64 = cols.iter().zip(x).map(|(c, a)| c[r] * a).sum();
+            let p: f64 = cols.iter().zip(x).map(|(c, a)| c.as_ref()[r] * a).sum();
             (p - y[r]).powi(2)
         })
         .sum()
@@ -1315,21 +1315,31 @@ pub fn identify(
         .collect();
     let amb_m = &amb[..m];
     let amb_shift: Vec<f64> = amb_m.iter().map(|a| a - amb_m[0]).collect();
+    // the screening adds p² per input: a source's power (u/ref)^exponent, exponent 1-2
     let mut lagged: Vec<Vec<Vec<f64>>> = Vec::new(); // [tau][input..., ambient term]
-    let mut lagged_sq: Vec<Vec<Vec<f64>>> = Vec::new(); // the same and p² per input
+    let mut lagged_p2: Vec<Vec<Vec<f64>>> = Vec::new(); // [tau][input]
     for &tau in &grid {
         let mut b: Vec<Vec<f64>> = powers.iter().map(|(_, _, p)| lowpass(t, p, tau)).collect();
         let la = lowpass(t, &amb_shift, tau);
         b.push(la.iter().zip(&amb_shift).map(|(l, a)| l - a).collect());
-        // the screening adds p² per input: a source's power (u/ref)^exponent, exponent 1-2
-        let mut sq = b.clone();
-        for (_, _, p) in &powers {
-            let p2: Vec<f64> = p.iter().map(|v| v * v).collect();
-            sq.push(lowpass(t, &p2, tau));
-        }
+        let sq = powers
+            .iter()
+            .map(|(_, _, p)| {
+                let p2: Vec<f64> = p.iter().map(|v| v * v).collect();
+                lowpass(t, &p2, tau)
+            })
+            .collect();
         lagged.push(b);
-        lagged_sq.push(sq);
+        lagged_p2.push(sq);
     }
+    // each τ's screening terms (lagged, then p²), borrowed: on a 1-Hz log of days each series
+    // is megabytes, and the screening fits every pair of time constants
+    let screen: Vec<Vec<&[f64]>> = lagged
+        .iter()
+        .zip(&lagged_p2)
+        .map(|(b, sq)| b.iter().chain(sq).map(Vec::as_slice).collect())
+        .collect();
+    let ones = vec![1.0; m];
 
     // screening: a temperature that a two-time-constant response to the inputs and the room
     // leaves with a residual above SCREEN_RATIO × its noise is not part of the heated structure
@@ -1362,9 +1372,9 @@ pub fn identify(
         let mut best = f64::INFINITY;
         for (a, &i) in coarse.iter().enumerate() {
             for &j in &coarse[a + 1..] {
-                let mut basis: Vec<Vec<f64>> = lagged_sq[i].clone();
-                basis.extend(lagged_sq[j].iter().cloned());
-                basis.push(vec![1.0; m]);
+                let mut basis: Vec<&[f64]> = screen[i].clone();
+                basis.extend(&screen[j]);
+                basis.push(&ones);
                 let (_, ssr) = fit(&basis, y)?;
                 best = best.min((ssr / m as f64).sqrt());
             }
