@@ -1159,13 +1159,40 @@ pub fn fit_initial_offsets(m: &Machine, run: &RunView<'_>, window: usize) -> Res
         return Ok(vec![0.0; nn]);
     }
     let base = simulate_nodes(m, run, &Init::Offsets(vec![0.0; nn]))?;
-    let mut cols = Vec::new();
-    for sj in &sensed {
+    let (cols, rhs) = start_system(m, &sensed, run.time, w, &base, sensed.len(), |j| {
         let mut off = vec![0.0; nn];
-        off[sj.node] = 1.0;
-        let resp = simulate_nodes(m, run, &Init::Offsets(off))?;
+        off[sensed[j].node] = 1.0;
+        simulate_nodes(m, run, &Init::Offsets(off))
+    })?;
+    let cols: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    let sol = lstsq_columns(&cols, &rhs)?;
+    let mut off = vec![0.0; nn];
+    for (sj, v) in sensed.iter().zip(sol) {
+        off[sj.node] = v.clamp(-2.0, 2.0);
+    }
+    Ok(off)
+}
+
+/// The least-squares system of a fitted start (the network is linear in its start): over the
+/// first `w` rows that each of the `sensed` nodes reads, one column per unknown start `j`
+/// (`response(j)`: the node temperatures, row-major, with that start 1 K higher, less `base`,
+/// the temperatures from the start as it is) and the right-hand side (each reading less what
+/// its sensor would read on `base`, [`NodeSpec::sensor_reads`]).
+pub fn start_system(
+    m: &Machine,
+    sensed: &[Sensed<'_>],
+    time: &[f64],
+    w: usize,
+    base: &[f64],
+    unknowns: usize,
+    mut response: impl FnMut(usize) -> Result<Vec<f64>>,
+) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
+    let nn = m.nodes.len();
+    let mut cols = Vec::with_capacity(unknowns);
+    for j in 0..unknowns {
+        let resp = response(j)?;
         let mut col = Vec::with_capacity(w * sensed.len());
-        for sn in &sensed {
+        for sn in sensed {
             let i = sn.node;
             for k in (0..w).filter(|&k| sn.reading.reads(k)) {
                 col.push(resp[k * nn + i] - base[k * nn + i]);
@@ -1174,23 +1201,14 @@ pub fn fit_initial_offsets(m: &Machine, run: &RunView<'_>, window: usize) -> Res
         cols.push(col);
     }
     let mut rhs = Vec::with_capacity(w * sensed.len());
-    for sn in &sensed {
+    for sn in sensed {
         let (i, meas) = (sn.node, &*sn.reading.values);
         let node: &NodeSpec = &m.nodes[i];
         for k in (0..w).filter(|&k| sn.reading.reads(k)) {
-            let pred = base[k * nn + i]
-                + node.sensor_offset_k
-                + node.sensor_drift_k_per_h * (run.time[k] - run.time[0]) / 3600.0;
-            rhs.push(meas[k] - pred);
+            rhs.push(meas[k] - node.sensor_reads(base[k * nn + i], time[k] - time[0]));
         }
     }
-    let cols: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-    let sol = lstsq_columns(&cols, &rhs)?;
-    let mut off = vec![0.0; nn];
-    for (sj, v) in sensed.iter().zip(sol) {
-        off[sj.node] = v.clamp(-2.0, 2.0);
-    }
-    Ok(off)
+    Ok((cols, rhs))
 }
 
 #[cfg(test)]

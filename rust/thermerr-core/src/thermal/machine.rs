@@ -78,6 +78,13 @@ pub struct NodeSpec {
 }
 
 impl NodeSpec {
+    /// What the node's sensor reads when the node is at `temp`, `since_s` seconds after the
+    /// run's first row: `temp` + its offset + its drift (formats.md, `sensor_offset_k` and
+    /// `sensor_drift_k_per_h`).
+    pub fn sensor_reads(&self, temp: f64, since_s: f64) -> f64 {
+        temp + self.sensor_offset_k + self.sensor_drift_k_per_h * since_s / 3600.0
+    }
+
     /// A boundary node named `name` whose temperature is the column `col` (not simulated: its
     /// capacity is never used, and it loses no heat to the room of its own).
     pub fn boundary_on(name: String, col: &str) -> NodeSpec {

@@ -646,22 +646,17 @@ pub fn simulate_nodes_on(
         march.chain();
     }
     if mach.unsensed_start == UnsensedStart::Fit && !unread.is_empty() {
-        let mut read = Vec::new();
-        for (p, &i) in net.dyn_nodes.iter().enumerate() {
-            let node = &mach.nodes[i];
-            if let (Some(c), false) = (&node.sensor, unread.contains(&p)) {
-                read.push(Reading {
-                    node: i,
-                    col: run.col(c)?,
-                    failing: run.failing(c)?,
-                    offset_k: node.sensor_offset_k,
-                    drift_k_per_h: node.sensor_drift_k_per_h,
-                });
-            }
-        }
-        let low = read.iter().map(|r| r.col[0]).fold(amb[0], f64::min);
-        let high = read.iter().map(|r| r.col[0]).fold(amb[0], f64::max);
-        for (p, v) in fitted_start(&mut march, &x, &unread, &read, run.time)? {
+        let mut read = super::calibrate::sensed(mach, run)?;
+        read.retain(|sn| net.pos[sn.node].is_some_and(|p| !unread.contains(&p)));
+        let low = read
+            .iter()
+            .map(|r| r.reading.values[0])
+            .fold(amb[0], f64::min);
+        let high = read
+            .iter()
+            .map(|r| r.reading.values[0])
+            .fold(amb[0], f64::max);
+        for (p, v) in fitted_start(mach, &mut march, &x, &unread, &read, run.time)? {
             x[p] = v.clamp(low, high);
         }
     }
@@ -687,25 +682,17 @@ pub fn simulate_nodes_on(
 /// The rows a fitted start reads ([`UnsensedStart::Fit`]): the run's first hour.
 pub const START_FIT_S: f64 = 3600.0;
 
-/// A sensed node's readings, for [`fitted_start`].
-struct Reading<'a> {
-    node: usize,
-    col: &'a [f64],
-    failing: Failing,
-    offset_k: f64,
-    drift_k_per_h: f64,
-}
-
 /// The starts of the nodes at positions `unread` (no reading gives them) that make the sensed
 /// nodes `read` follow their readings best over the run's first [`START_FIT_S`] (least squares:
 /// the network is linear in its start), each as (position, start). The other nodes start at
 /// `x`. Nothing when the window holds fewer than three rows or no sensed node; a node the sensed
 /// ones do not feel at all keeps its start (the least squares' minimum-norm solution).
 fn fitted_start(
+    mach: &Machine,
     march: &mut March<'_>,
     x: &[f64],
     unread: &[usize],
-    read: &[Reading<'_>],
+    read: &[super::calibrate::Sensed<'_>],
     t: &[f64],
 ) -> Result<Vec<(usize, f64)>> {
     let w = t.iter().take_while(|&&v| v - t[0] <= START_FIT_S).count();
@@ -713,41 +700,19 @@ fn fitted_start(
         return Ok(Vec::new());
     }
     let nn = march.nn;
-    let sim = |march: &mut March<'_>, x0: &[f64]| -> Result<Vec<f64>> {
+    let mut sim = |x0: &[f64]| -> Result<Vec<f64>> {
         let (mut xs, mut out) = (x0.to_vec(), vec![0.0; w * nn]);
         march.run_n::<0>(&mut xs, &mut out)?;
         Ok(out)
     };
-    let base = sim(march, x)?;
-    let rows: Vec<(usize, usize)> = read
-        .iter()
-        .enumerate()
-        .flat_map(|(j, r)| {
-            (0..w)
-                .filter(|&k| !r.failing.iter().any(|f| f.contains(&k)))
-                .map(move |k| (j, k))
-        })
-        .collect();
-    let mut cols = Vec::with_capacity(unread.len());
-    for &u in unread {
+    let base = sim(x)?;
+    let (cols, rhs) = super::calibrate::start_system(mach, read, t, w, &base, unread.len(), |j| {
         let mut xu = x.to_vec();
-        xu[u] += 1.0;
-        let resp = sim(march, &xu)?;
-        cols.push(
-            rows.iter()
-                .map(|&(j, k)| resp[k * nn + read[j].node] - base[k * nn + read[j].node])
-                .collect::<Vec<f64>>(),
-        );
-    }
-    let target: Vec<f64> = rows
-        .iter()
-        .map(|&(j, k)| {
-            let r = &read[j];
-            r.col[k] - r.offset_k - r.drift_k_per_h * (t[k] - t[0]) / 3600.0 - base[k * nn + r.node]
-        })
-        .collect();
+        xu[unread[j]] += 1.0;
+        sim(&xu)
+    })?;
     let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
-    let Ok(a) = crate::linalg::lstsq_columns(&refs, &target) else {
+    let Ok(a) = crate::linalg::lstsq_columns(&refs, &rhs) else {
         return Ok(Vec::new());
     };
     Ok(unread
@@ -1027,9 +992,7 @@ pub fn finish(mach: &Machine, run: &RunView<'_>, temps: Vec<f64>) -> Result<Simu
             let r: Vec<f64> = temps
                 .chunks_exact(nn)
                 .zip(t)
-                .map(|(row, tk)| {
-                    row[i] + node.sensor_offset_k + node.sensor_drift_k_per_h * (tk - t[0]) / 3600.0
-                })
+                .map(|(row, tk)| node.sensor_reads(row[i], tk - t[0]))
                 .collect();
             sensors.push((c.clone(), r));
         }

@@ -82,10 +82,7 @@ pub(super) fn holdout(cal: &Calibration, held: &HeldOut<'_, '_>) -> Result<Holdo
         let res: Vec<f64> = (from..run.len())
             .map(|k| match sn.reading.reads(k) {
                 true => {
-                    sim.temps[k * nn + i]
-                        + node.sensor_offset_k
-                        + node.sensor_drift_k_per_h * (run.time[k] - run.time[0]) / 3600.0
-                        - meas_t[k]
+                    node.sensor_reads(sim.temps[k * nn + i], run.time[k] - run.time[0]) - meas_t[k]
                 }
                 false => 0.0,
             })
