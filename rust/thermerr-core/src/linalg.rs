@@ -65,43 +65,57 @@ pub fn lstsq(a: MatRef<'_, f64>, b: &[f64]) -> Result<Vec<f64>> {
 /// on every machine. For the thermal network's fits, whose verdicts on a real run move with the
 /// last bits; the estimators keep faer's faster blocked [`lstsq`].
 pub fn lstsq_columns(cols: &[&[f64]], b: &[f64]) -> Result<Vec<f64>> {
-    let (m, n) = (b.len(), cols.len());
-    if cols.iter().any(|c| c.len() != m) {
+    let mut x = lstsq_columns_many(cols, &[b])?;
+    Ok(x.pop().expect("one solution per right-hand side"))
+}
+
+/// [`lstsq_columns`] for several right-hand sides on the same columns: one factorisation, then
+/// each `b` solved as [`lstsq_columns`] would solve it alone (the same bits). On a 1-Hz log of
+/// days the factorisation of a long matrix is the cost, and the screening asks the same basis
+/// about every temperature.
+pub fn lstsq_columns_many(cols: &[&[f64]], bs: &[&[f64]]) -> Result<Vec<Vec<f64>>> {
+    let n = cols.len();
+    let m = cols.first().map_or(0, |c| c.len());
+    if cols.iter().any(|c| c.len() != m) || bs.iter().any(|b| b.len() != m) {
         return Err(Error::Shape(format!(
-            "least squares: {m} right-hand sides but a column of another length"
+            "least squares: columns of {m} rows but a column or right-hand side of another length"
         )));
     }
-    if m == 0 || n == 0 {
+    if m == 0 || n == 0 || bs.is_empty() {
         return Err(Error::Shape("least squares on an empty system".into()));
     }
-    if !all_finite(b) || !cols.iter().all(|c| all_finite(c)) {
+    if !bs.iter().all(|b| all_finite(b)) || !cols.iter().all(|c| all_finite(c)) {
         return Err(Error::Numerical(
             "least squares on a system with non-finite values".into(),
         ));
     }
-    let a = nalgebra::DMatrix::from_fn(m, n, |i, j| cols[j][i]);
-    let rhs = nalgebra::DVector::from_column_slice(b);
+    let matrix = || nalgebra::DMatrix::from_fn(m, n, |i, j| cols[j][i]);
     let tol = f64::EPSILON * m.max(n) as f64;
     if m >= n {
         let scale = cols
             .iter()
             .map(|c| dot(c, c).sqrt())
             .fold(0.0_f64, f64::max);
-        let qr = a.clone().qr();
+        let qr = matrix().qr();
         let r = qr.r();
         let full_rank = scale > 0.0 && (0..n).all(|i| r[(i, i)].abs() > tol * scale * 1e3);
         if full_rank {
-            let mut qtb = rhs.clone();
-            qr.q_tr_mul(&mut qtb);
-            let top = qtb.rows(0, n).into_owned();
-            let x = r
-                .solve_upper_triangular(&top)
-                .ok_or_else(|| Error::Numerical("least squares: R is singular".into()))?;
-            return finite(x.iter().copied().collect(), "least squares");
+            return bs
+                .iter()
+                .map(|b| {
+                    let mut qtb = nalgebra::DVector::from_column_slice(b);
+                    qr.q_tr_mul(&mut qtb);
+                    let top = qtb.rows(0, n).into_owned();
+                    let x = r
+                        .solve_upper_triangular(&top)
+                        .ok_or_else(|| Error::Numerical("least squares: R is singular".into()))?;
+                    finite(x.iter().copied().collect(), "least squares")
+                })
+                .collect();
         }
     }
     // a bounded number of sweeps: nalgebra's `svd` would loop until convergence
-    let svd = a
+    let svd = matrix()
         .try_svd(true, true, f64::EPSILON, 10_000)
         .ok_or_else(|| Error::Numerical("SVD did not converge".into()))?;
     let smax = svd.singular_values.max();
@@ -110,10 +124,14 @@ pub fn lstsq_columns(cols: &[&[f64]], b: &[f64]) -> Result<Vec<f64>> {
             "least squares on an all-zero matrix".into(),
         ));
     }
-    let x = svd
-        .solve(&rhs, tol * smax)
-        .map_err(|e| Error::Numerical(format!("least squares: {e}")))?;
-    finite(x.iter().copied().collect(), "least squares")
+    bs.iter()
+        .map(|b| {
+            let x = svd
+                .solve(&nalgebra::DVector::from_column_slice(b), tol * smax)
+                .map_err(|e| Error::Numerical(format!("least squares: {e}")))?;
+            finite(x.iter().copied().collect(), "least squares")
+        })
+        .collect()
 }
 
 fn finite(v: Vec<f64>, what: &str) -> Result<Vec<f64>> {
@@ -513,6 +531,34 @@ mod tests {
         assert!(lstsq_columns(&[&nan[..]], &b).is_err());
         assert!(lstsq_columns(&[&c[..]], &nan).is_err());
         assert!(lstsq_columns(&[&[0.0; 4][..]], &[0.0; 4]).is_err());
+    }
+
+    #[test]
+    fn several_right_hand_sides_solve_as_each_alone() {
+        // one factorisation for all: each solution the same bits as its own call, on the QR
+        // path (full rank) and on the SVD path (two identical columns)
+        let cols = columns(5, 300);
+        let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+        let bs: Vec<Vec<f64>> = (1..4)
+            .map(|k| {
+                (0..300)
+                    .map(|i| (i as f64 / (10.0 * k as f64)).cos())
+                    .collect()
+            })
+            .collect();
+        let brefs: Vec<&[f64]> = bs.iter().map(Vec::as_slice).collect();
+        let many = lstsq_columns_many(&refs, &brefs).unwrap();
+        for (x, b) in many.iter().zip(&bs) {
+            assert_eq!(x, &lstsq_columns(&refs, b).unwrap());
+        }
+        let twice = [refs[0], refs[0], refs[1]];
+        let many = lstsq_columns_many(&twice, &brefs).unwrap();
+        for (x, b) in many.iter().zip(&bs) {
+            assert_eq!(x, &lstsq_columns(&twice, b).unwrap());
+        }
+        // a right-hand side of another length, or none at all, is refused
+        assert!(lstsq_columns_many(&refs, &[&bs[0][..299]]).is_err());
+        assert!(lstsq_columns_many(&refs, &[]).is_err());
     }
 
     #[test]

@@ -112,7 +112,7 @@ use super::machine::{
 use super::sim::{lag, simulate, simulate_nodes, Init, RunView};
 use crate::error::{Error, Result};
 use crate::fcm::FcmParams;
-use crate::linalg::lstsq_columns;
+use crate::linalg::{lstsq_columns, lstsq_columns_many};
 use crate::metrics::{pearson, rms_of as rms};
 use crate::portable;
 use crate::run::Run;
@@ -314,6 +314,21 @@ fn fit<C: AsRef<[f64]>>(basis: &[C], y: &[f64]) -> Result<(Vec<f64>, f64)> {
     Ok((c, ssr))
 }
 
+/// [`fit`] of several series on one basis, factorised once: the same numbers as one [`fit`] each.
+fn fit_many<C: AsRef<[f64]>>(basis: &[C], ys: &[&[f64]]) -> Result<Vec<(Vec<f64>, f64)>> {
+    crate::interrupt::check()?;
+    let cols: Vec<&[f64]> = basis.iter().map(AsRef::as_ref).collect();
+    let cs = lstsq_columns_many(&cols, ys)?;
+    Ok(cs
+        .into_iter()
+        .zip(ys)
+        .map(|(c, y)| {
+            let ssr = misfit(basis, &c, y);
+            (c, ssr)
+        })
+        .collect())
+}
+
 /// Cumulative trapezoid integral.
 fn cumtrapz(t: &[f64], y: &[f64]) -> Vec<f64> {
     let mut out = vec![0.0; y.len()];
@@ -425,13 +440,27 @@ fn unit_scale(c: &mut [f64]) -> f64 {
 }
 
 /// The squared misfit ‖Σ x_j c_j − y‖² of coefficients `x` on columns `cols`.
+///
+/// Each row's prediction is summed over the columns in their order and the squares over the rows
+/// in theirs, as a row at a time would; the columns are walked a block of rows at a time.
 fn misfit<C: AsRef<[f64]>>(cols: &[C], x: &[f64], y: &[f64]) -> f64 {
-    (0..y.len())
-        .map(|r| {
-            let p: f64 = cols.iter().zip(x).map(|(c, a)| c.as_ref()[r] * a).sum();
-            (p - y[r]).powi(2)
-        })
-        .sum()
+    const BLOCK: usize = 1024;
+    let mut p = [0.0_f64; BLOCK];
+    let mut ssr = 0.0;
+    for start in (0..y.len()).step_by(BLOCK) {
+        let yb = &y[start..(start + BLOCK).min(y.len())];
+        let p = &mut p[..yb.len()];
+        p.fill(0.0);
+        for (c, a) in cols.iter().zip(x) {
+            for (pr, v) in p.iter_mut().zip(&c.as_ref()[start..start + yb.len()]) {
+                *pr += v * a;
+            }
+        }
+        for (pr, yr) in p.iter().zip(yb) {
+            ssr += (pr - yr).powi(2);
+        }
+    }
+    ssr
 }
 
 /// A temperature column's noise for the screening and the copy test: the RMS of its second
@@ -1348,6 +1377,8 @@ pub fn identify(
     // the spare columns that fail the screening (not the flat ones: a constant or the room)
     let mut outside: Vec<&str> = Vec::new();
     let coarse: Vec<usize> = (0..grid.len()).step_by(2).collect();
+    // each column's noise, and why it is flat when it does not rise over the ambient
+    let mut flat: Vec<(f64, Option<String>)> = Vec::new();
     for (s, c) in sensors.iter().enumerate() {
         let y = &rises[s];
         let noise = reading_noise(&view.col(c)?[..m]);
@@ -1364,21 +1395,38 @@ pub fn identify(
             } else {
                 format!("its rise over the ambient varies by {over:.3} K RMS on the training rows")
             };
-            spare.push(format!(
+            flat.push((noise, Some(format!(
                 "{c}: {what}, within {FLAT_RATIO}x its noise ({noise:.3} K): it does not follow the machine's heat (a constant, or another reading of the room), left out of the network (a spare column)"
-            ));
-            continue;
+            ))));
+        } else {
+            flat.push((noise, None));
         }
-        let mut best = f64::INFINITY;
+    }
+    let rising: Vec<usize> = (0..sensors.len())
+        .filter(|&s| flat[s].1.is_none())
+        .collect();
+    // every pair of time constants, one factorisation asked about every rising column
+    let mut best = vec![f64::INFINITY; rising.len()];
+    if !rising.is_empty() {
+        let ys: Vec<&[f64]> = rising.iter().map(|&s| rises[s].as_slice()).collect();
         for (a, &i) in coarse.iter().enumerate() {
             for &j in &coarse[a + 1..] {
                 let mut basis: Vec<&[f64]> = screen[i].clone();
                 basis.extend(&screen[j]);
                 basis.push(&ones);
-                let (_, ssr) = fit(&basis, y)?;
-                best = best.min((ssr / m as f64).sqrt());
+                for (b, (_, ssr)) in best.iter_mut().zip(fit_many(&basis, &ys)?) {
+                    *b = b.min((ssr / m as f64).sqrt());
+                }
             }
         }
+    }
+    let mut best = best.into_iter();
+    for (s, (noise, flat)) in flat.into_iter().enumerate() {
+        if let Some(why) = flat {
+            spare.push(why);
+            continue;
+        }
+        let (c, best) = (sensors[s], best.next().expect("a fit per rising column"));
         if best > SCREEN_RATIO * noise {
             outside.push(c);
             spare.push(format!(
@@ -1567,27 +1615,33 @@ pub fn identify(
         gains: Vec<f64>,
         r2: f64,
     }
-    let first_order = |r: usize| -> Result<Fo> {
-        let y = &rises[r];
-        let ss: f64 = y.iter().map(|v| v * v).sum::<f64>().max(1e-12);
-        let mut best: Option<Fo> = None;
+    // each τ's basis factorised once for all the sensors asked about
+    let first_order = |of: &[usize]| -> Result<Vec<Fo>> {
+        let ys: Vec<&[f64]> = of.iter().map(|&r| rises[r].as_slice()).collect();
+        let ss: Vec<f64> = ys
+            .iter()
+            .map(|y| y.iter().map(|v| v * v).sum::<f64>().max(1e-12))
+            .collect();
+        let mut best: Vec<Option<Fo>> = of.iter().map(|_| None).collect();
         for (g, &tau) in grid.iter().enumerate() {
-            let (coef, ssr) = fit(&lagged[g], y)?;
-            let r2 = 1.0 - ssr / ss;
-            if best.as_ref().is_none_or(|b| r2 > b.r2) {
-                best = Some(Fo {
-                    tau,
-                    gains: coef,
-                    r2,
-                });
+            let fits = fit_many(&lagged[g], &ys)?;
+            for ((b, (coef, ssr)), ss) in best.iter_mut().zip(fits).zip(&ss) {
+                let r2 = 1.0 - ssr / ss;
+                if b.as_ref().is_none_or(|b| r2 > b.r2) {
+                    *b = Some(Fo {
+                        tau,
+                        gains: coef,
+                        r2,
+                    });
+                }
             }
         }
-        Ok(best.expect("the τ grid is not empty"))
+        Ok(best
+            .into_iter()
+            .map(|b| b.expect("the τ grid is not empty"))
+            .collect())
     };
-    let fos = reps
-        .iter()
-        .map(|&r| first_order(r))
-        .collect::<Result<Vec<Fo>>>()?;
+    let fos = first_order(&reps)?;
 
     // 4. sources
     let names: Vec<String> = reps.iter().map(|&r| names_of(sensors[r])).collect();
@@ -1603,8 +1657,7 @@ pub fn identify(
             // that warms fastest with it
             let mut by_member = vec![0.0_f64; nn];
             for (i, g) in groups.iter().enumerate() {
-                for &s in g {
-                    let f = first_order(s)?;
+                for f in first_order(g)? {
                     by_member[i] = by_member[i].max(f.gains[ui] / f.tau);
                 }
             }
