@@ -683,7 +683,7 @@ pub const CONSTANT_ROOM: &str = "Or a climate-controlled room on a coarse logger
 /// What is done with a temperature that reads one value in every row ([`SuspectKind::Constant`]).
 pub const CONSTANT_TEMPERATURE: &str = "It carries no temperature to model: identification takes it for neither the room nor a node's sensor, and the diagnosis does not try it as a heat source (named in a machine file, it is used as read). Mend the sensor or leave the column out";
 /// What is done with a temperature that jumps ([`Suspect::fails`]), as its suspect line says it.
-pub const FAILING_TEMPERATURE: &str = "Identification takes it for neither the room nor a node's sensor, and the diagnosis does not try it as a heat source. Over its failing rows (from a jump away to a jump back, or to the end of the run; a sensor that reads one value from the first row until it jumps, from the start): as a node's sensor it is not fitted; as the room or a boundary it is held at its last right reading, and the model is neither fitted nor scored there. Drop the column or mend the rows if the change is real";
+pub const FAILING_TEMPERATURE: &str = "Identification takes it for neither the room nor a node's sensor (unless each failing stretch is a spike of 600 s or less: bridged by a straight line, as a short gap is), and the diagnosis does not try it as a heat source. Over its failing rows (from a jump away to a jump back, or to the end of the run; a sensor that reads one value from the first row until it jumps, from the start): as a node's sensor it is not fitted; as the room or a boundary it is held at its last right reading, and the model is neither fitted nor scored there. Drop the column or mend the rows if the change is real";
 
 /// The rows (0-based, each the reading after the step) where `col` jumps: a step whose rate is
 /// more than [`JUMP_FACTOR`] times the column's 99th percentile of rates and [`JUMP_FLOOR`]
@@ -742,6 +742,20 @@ pub fn failing_rows(col: &[f64], time: &[f64]) -> Vec<std::ops::Range<usize>> {
         return Vec::new();
     }
     failing_of(col, time, &jump_rows(col, time))
+}
+
+/// The failing rows of `col` ([`failing_rows`]) when each failing stretch is a short spike: it
+/// starts after the first row, a jump brings the column back before the run ends, and it spans
+/// [`GAP_FLOOR_S`] or less from the last right reading to the first right one again (a gap in a
+/// log that short is not said: a lumped network's time constants are longer, and a straight line
+/// between the right readings misses little). `None` when the column never fails, or when a
+/// stretch is longer or open (a sensor dead from the start, or until the end).
+pub fn short_failures(col: &[f64], time: &[f64]) -> Option<Vec<std::ops::Range<usize>>> {
+    let rows = failing_rows(col, time);
+    let short = |r: &std::ops::Range<usize>| {
+        r.start >= 1 && r.end < col.len() && time[r.end] - time[r.start - 1] <= GAP_FLOOR_S
+    };
+    (!rows.is_empty() && rows.iter().all(short)).then_some(rows)
 }
 
 /// Whether `col` reads one value from its first row to the jump at row `j` (0-based), for

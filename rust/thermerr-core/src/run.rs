@@ -851,7 +851,7 @@ fn csv_error(file: &str, bytes: &[u8], e: csv::Error) -> Error {
 
 /// Fills NaN gaps in place, linear in `t`. Returns how many values it filled, or `usize::MAX`
 /// when the column has no value at all.
-fn interpolate_gaps(t: &[f64], v: &mut [f64]) -> usize {
+pub(crate) fn interpolate_gaps(t: &[f64], v: &mut [f64]) -> usize {
     let known: Vec<usize> = (0..v.len()).filter(|&i| !v[i].is_nan()).collect();
     if known.is_empty() {
         return usize::MAX;

@@ -457,6 +457,47 @@ fn a_failing_sensor_is_not_fitted_from_its_jump_to_the_next_or_the_end() {
 }
 
 #[test]
+#[allow(clippy::single_range_in_vec_init)] // a list of row ranges that holds one
+fn only_spikes_that_come_back_within_a_short_gap_are_short_failures() {
+    let (t, clean) = warming(960);
+    let step = t[1] - t[0];
+    assert_eq!(short_failures(&clean, &t), None);
+    // two spikes, each back after a few readings
+    let mut y = clean.clone();
+    y[500] += 60.0;
+    for v in &mut y[700..703] {
+        *v = -200.0;
+    }
+    assert_eq!(short_failures(&y, &t), Some(vec![500..501, 700..703]));
+    // out for longer than GAP_FLOOR_S from the last right reading to the next (40 rows out:
+    // 41 steps, 615 s): not short
+    let long = (GAP_FLOOR_S / step) as usize;
+    let mut y = clean.clone();
+    for v in &mut y[300..300 + long] {
+        *v = 85.0;
+    }
+    assert_eq!(failing_rows(&y, &t), vec![300..300 + long]);
+    assert_eq!(short_failures(&y, &t), None);
+    // one row fewer, it spans GAP_FLOOR_S exactly: short
+    let mut y = clean.clone();
+    for v in &mut y[300..300 + long - 1] {
+        *v = 85.0;
+    }
+    assert_eq!(short_failures(&y, &t), Some(vec![300..300 + long - 1]));
+    // open to the end: not short, however late it opens
+    let mut y = clean.clone();
+    y[959] = -200.0;
+    assert_eq!(short_failures(&y, &t), None);
+    // a short spike beside a long stretch: the column is not mended
+    let mut y = clean.clone();
+    y[100] += 60.0;
+    for v in &mut y[600..] {
+        *v = -200.0;
+    }
+    assert_eq!(short_failures(&y, &t), None);
+}
+
+#[test]
 fn a_spike_on_a_short_run_is_seen() {
     // 121 readings: the 99th percentile of 120 steps would be the spike's own second step
     let (t, mut y) = warming(121);

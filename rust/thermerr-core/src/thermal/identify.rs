@@ -1049,6 +1049,46 @@ fn cycles_within_the_hour(t: &[f64], x: &[f64]) -> Option<(f64, f64)> {
     (share > ROOM_FAST_SHARE && fast > ROOM_FAST_NOISE * reading_noise(x)).then_some((fast, share))
 }
 
+/// The run with each temperature whose failing stretches are all short spikes
+/// ([`crate::guard::short_failures`]: a thermocouple's glitch, a loose contact for a moment)
+/// bridged by a straight line in time between the right readings on either side, and a note per
+/// column; `None` when no column has such spikes. Left in, a spike of hundreds of kelvin would
+/// make the column fail ([`failed_columns`]) and lose the network a sensor for a few rows; a
+/// longer or open stretch (a sensor dead for good) still does. Calibration and the diagnosis
+/// read the run as it is and neither fit nor score those rows. With the run, the columns bridged.
+fn bridge_spikes(run: &Run, temps: &[&str]) -> (Option<(Run, Vec<String>)>, Vec<String>) {
+    let mut notes = Vec::new();
+    let mut mended: Option<(Run, Vec<String>)> = None;
+    for (k, name) in run.names.iter().enumerate() {
+        if !temps.contains(&name.as_str()) {
+            continue;
+        }
+        let Some(rows) = crate::guard::short_failures(&run.columns[k], &run.time_s) else {
+            continue;
+        };
+        let (copy, names) = mended.get_or_insert_with(|| (run.clone(), Vec::new()));
+        names.push(name.clone());
+        let col = &mut copy.columns[k];
+        for r in &rows {
+            col[r.clone()].fill(f64::NAN);
+        }
+        crate::run::interpolate_gaps(&run.time_s, col);
+        let count: usize = rows.iter().map(|r| r.len()).sum();
+        notes.push(format!(
+            "{name}: {} short spike{} ({count} row{}, first at row {}), each back within {} s: \
+             bridged by a straight line for identification, so it may be the room or a node's \
+             sensor; calibration and the diagnosis, reading the run as it is, neither fit nor \
+             score those rows",
+            rows.len(),
+            if rows.len() == 1 { "" } else { "s" },
+            if count == 1 { "" } else { "s" },
+            rows[0].start + 1,
+            crate::guard::GAP_FLOOR_S
+        ));
+    }
+    (mended, notes)
+}
+
 /// The temperatures the run shows failing ([`Suspect::fails`](crate::guard::Suspect::fails)):
 /// taken for neither the room nor a node's sensor (a dead sensor read as the coldest place would
 /// be chosen as the room, and every node's balance built on it). `given` (the ambient the user
@@ -1157,8 +1197,12 @@ pub fn identify(
 ) -> Result<Identification> {
     let file = run.source.clone();
     let mut ck = check_input(run, opts)?;
+    let as_read = RunView::new(run);
+    as_read.one_run()?;
+    // a temperature whose only faults are short spikes is read with them bridged
+    let (bridged, bridge_notes) = bridge_spikes(run, &ck.temps);
+    let run = bridged.as_ref().map_or(run, |(r, _)| r);
     let view = RunView::new(run);
-    view.one_run()?;
     let hview = holdout.map(RunView::new);
     if let Some(h) = &hview {
         h.one_run()?;
@@ -1174,7 +1218,7 @@ pub fn identify(
         }
     };
     let t = &run.time_s[..m];
-    let mut notes = Vec::new();
+    let mut notes = bridge_notes;
     // readings a run itself makes suspect, of the columns identification reads: said, not
     // changed (a separate held-out run's too, below)
     fn suspects_in(v: &RunView<'_>, temps: &[&str], axes: &[String]) -> Vec<crate::guard::Suspect> {
@@ -1186,7 +1230,8 @@ pub fn identify(
             .unzip();
         crate::guard::suspect_readings(&v.source, &names, &cols, v.time)
     }
-    let suspect_readings = suspects_in(&view, &ck.temps, &ck.axes);
+    // (as read: a spike bridged for identification is said all the same)
+    let suspect_readings = suspects_in(&as_read, &ck.temps, &ck.axes);
     // a probe that reads one value in every row has no drift to map (its map would be zeros,
     // and every diagnosis would leave it out): every axis (no `--axis`) goes on without it, as
     // the diagnosis of every axis does; named, it is refused, as the diagnosis of it is
@@ -1253,7 +1298,10 @@ pub fn identify(
     }
     // a temperature that jumps (an open thermocouple, a loose cable) is no room and no node's
     // sensor: left out unless given as the ambient, or unless too few others are left
-    let failed = failed_columns(&suspect_readings, &ck.temps, opts.ambient.as_deref());
+    let mut failed = failed_columns(&suspect_readings, &ck.temps, opts.ambient.as_deref());
+    if let Some((_, names)) = &bridged {
+        failed.retain(|(c, _)| !names.contains(c));
+    }
     let temps: Vec<&str> = ck
         .temps
         .iter()
