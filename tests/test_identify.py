@@ -934,6 +934,32 @@ def test_a_sensor_that_fails_is_neither_the_room_nor_a_node():
 
 
 
+def test_identification_times_its_stages_and_draws_a_bar_when_asked(capsys, tmp_path):
+    """On a 1-Hz log of days `init` runs for seconds with nothing on screen: the summary now has
+    each stage's wall time in the order they ran, the command line says them, and a terminal gets
+    a bar of the stages (the core counts them for the binding's callback, which sees every stage
+    done, never more than planned)."""
+    c = syn.make_case("vmc", "none", 1, hours=HOURS, dt=DT_S)
+    run = _run(c.train, "train.csv")
+    seen = []
+    _, text = tr._core.MachineModel.identify(*tr.thermal._run_args(run), None, progress=lambda *a: seen.append(a))
+    s = json.loads(text)
+    assert list(s["stage_s"]) == ["screening", "structure", "calibration_and_checks", "drift_maps"]
+    assert all(v >= 0.0 for v in s["stage_s"].values())
+    assert seen and seen[-1] == (4, 4, 4), seen
+    assert all(done <= planned for done, planned, _ in seen)
+    Machine.identify(run, progress=True)
+    err = capsys.readouterr().err
+    assert "identification, stage" in err and "stage" in err
+    Machine.identify(run, progress=False)
+    assert capsys.readouterr().err == ""
+    path = tmp_path / "train.csv"
+    np.savetxt(path, np.column_stack(list(c.train.values())), delimiter=",", header=",".join(c.train), comments="")
+    assert main(["init", str(path), "--out", str(tmp_path / "m.toml")]) == 0
+    err = capsys.readouterr().err
+    assert "identified in " in err and "screening" in err and "drift maps" in err, err
+
+
 def test_a_node_sensor_with_a_short_spike_stays_a_node_sensor():
     """A thermocouple's glitch: two readings at the rail (-200 °C) in the middle of the run, then
     right again. Before, any jump made the column fail, and the network lost the sensor of the

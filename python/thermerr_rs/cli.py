@@ -556,8 +556,10 @@ def cmd_init(args: argparse.Namespace) -> int:
     hold = _read(args, args.holdout) if args.holdout else None
     _say_how_held_out(args, run, hold)
     _stage(args, f"identifying a thermal network from {run.source} ...")
+    t0 = time.perf_counter()
     _, s = Machine.identify(run, args.axis, nodes=args.nodes, ambient=args.ambient, inputs=args.input,
-                            seed=args.seed, holdout=hold)
+                            seed=args.seed, holdout=hold, progress=_progress_enabled(args))
+    _stage(args, f"identified in {time.perf_counter() - t0:.1f} s: " + _stage_times(s["stage_s"]))
     write_atomic(args.out, s["toml"])
     if args.json:
         _print_json({k: v for k, v in s.items() if k != "toml"} | {"out": args.out})
@@ -622,9 +624,10 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 _STAGES = ("baseline", "round_1", "later_rounds_and_check")
 
 
-def _stage_times(report: dict[str, Any]) -> str:
-    st = report.get("stage_s", {})
-    order = sorted(st, key=lambda k: (_STAGES.index(k) if k in _STAGES else len(_STAGES), k))
+def _stage_times(st: dict[str, float]) -> str:
+    """Each stage's wall time, in the order they ran: the diagnosis's by :data:`_STAGES` (its
+    report keeps them in key order), any other call's in the order given (an identification's)."""
+    order = sorted(st, key=lambda k: _STAGES.index(k)) if set(st) <= set(_STAGES) else list(st)
     return ", ".join(f"{k.replace('_', ' ')} {st[k]:.1f} s" for k in order)
 
 
@@ -673,7 +676,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         _stage(args, f"diagnosed {len(multi.axes)} axes in {time.perf_counter() - t0:.1f} s"
                      + "".join(f"; {a} left out (see below)" for a in multi.skipped))
         for a in multi.axes:
-            _stage(args, f"  {a}: " + _stage_times(multi[a].report))
+            _stage(args, f"  {a}: " + _stage_times(multi[a].report.get("stage_s", {})))
         result: Diagnosis | AxesDiagnosis = multi
     else:
         _stage(args, f"diagnosing {args.machine} on {run.source}: calibrating the baseline, screening "
@@ -681,7 +684,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         result = diagnose(run, machine, hold, axis=axes[0] if axes else None, network=args.network,
                           progress=_progress_enabled(args))
-        _stage(args, f"diagnosed in {time.perf_counter() - t0:.1f} s: " + _stage_times(result.report))
+        _stage(args, f"diagnosed in {time.perf_counter() - t0:.1f} s: " + _stage_times(result.report.get("stage_s", {})))
     warm.join()  # the figures are drawn by one thread at a time
     page = result.write(args.out)
     if args.json:

@@ -65,7 +65,8 @@ class Machine:
     def identify(cls, run: Run, axes: str | list[str] | None = None, *, nodes: int | None = None,
                  ambient: str | None = None, inputs: str | list[str] | None = None,
                  train_fraction: float = 0.7, seed: int = 0,
-                 max_iter: int = 100, holdout: Run | None = None) -> tuple[Machine, dict[str, Any]]:
+                 max_iter: int = 100, holdout: Run | None = None,
+                 progress: bool | None = None) -> tuple[Machine, dict[str, Any]]:
         """Identify a starting network from a run alone (docs/machine-model.md, "Starting from
         data"): pick the ambient, group the other sensors into nodes by fuzzy c-means, place the
         sources, link the nodes by response order, set values from each node's time constant and
@@ -103,7 +104,10 @@ class Machine:
         ``"axis"`` or ``"temperatures"``, the lower; ``None`` with one axis), ``suspect_readings`` (readings the run itself
         makes suspect, as in a diagnosis's report; also warned as
         :class:`~thermerr_rs.errors.SuspectReadingWarning`) and
-        ``toml``, the file with a comment on every choice (what ``thermerr init`` writes).
+        ``toml``, the file with a comment on every choice (what ``thermerr init`` writes), and
+        ``stage_s``, the wall time of each stage in seconds (``screening``, ``structure``,
+        ``calibration_and_checks``, ``drift_maps``), in the order they ran.
+        ``progress``: a bar of the stages done (default: when stderr is a terminal).
         ``inputs``: the ``U_*`` columns that heat the machine (default every one; a column that
         heats nothing, a program number or a tool number, would be given heat sources all the
         same, since a run's temperatures cannot tell it from a heat source that moves with the
@@ -120,12 +124,13 @@ class Machine:
         ax = [axes] if isinstance(axes, str) else (list(axes) if axes is not None else None)
         ins = [inputs] if isinstance(inputs, str) else (list(inputs) if inputs is not None else None)
         run, holdout, train_rows = _joined(run, holdout)
-        inner, summary = _core.MachineModel.identify(*_run_args(run),
-                                                     _run_args(holdout) if holdout is not None else None,
-                                                     axes=ax, nodes=nodes, ambient=ambient,
-                                                     inputs=ins, train_fraction=train_fraction,
-                                                     train_rows=train_rows, seed=seed,
-                                                     max_iter=max_iter)
+        with _progress_bar(progress, "identification", unit="stage", stage_word="stage") as cb:
+            inner, summary = _core.MachineModel.identify(*_run_args(run),
+                                                         _run_args(holdout) if holdout is not None else None,
+                                                         axes=ax, nodes=nodes, ambient=ambient,
+                                                         inputs=ins, train_fraction=train_fraction,
+                                                         train_rows=train_rows, seed=seed,
+                                                         max_iter=max_iter, progress=cb)
         s: dict[str, Any] = json.loads(summary)
         _warn_suspects(sp["text"] for sp in s["suspect_readings"])
         return cls(inner), s
@@ -341,21 +346,23 @@ def _identified_line(driven_by: str | None = None) -> str:
 
 
 @contextmanager
-def _progress_bar(show: bool | None, desc: str) -> Iterator[Callable[[int, int, int], None] | None]:
-    """A tqdm bar of the calibrations a diagnosis has done out of those planned so far (the plan
-    grows when a round starts), with the round reached; shown on a terminal (``show=None``:
-    when stderr is one), and closed however the call ends."""
+def _progress_bar(show: bool | None, desc: str, unit: str = "fit",
+                  stage_word: str = "round") -> Iterator[Callable[[int, int, int], None] | None]:
+    """A tqdm bar of the work a long call has done out of that planned so far (a diagnosis's
+    calibrations: the plan grows when a round starts; an identification's stages), with the
+    round or stage reached; shown on a terminal (``show=None``: when stderr is one), and closed
+    however the call ends."""
     if not (sys.stderr.isatty() if show is None else show):
         yield None
         return
     from tqdm import tqdm
 
-    bar = tqdm(total=0, desc=desc, unit="fit", leave=False)
+    bar = tqdm(total=0, desc=desc, unit=unit, leave=False)
 
     def update(done: int, planned: int, stage: int) -> None:
         bar.total = planned
         bar.n = done
-        bar.set_description(f"{desc}, round {stage}" if stage else desc, refresh=False)
+        bar.set_description(f"{desc}, {stage_word} {stage}" if stage else desc, refresh=False)
         bar.refresh()
 
     try:

@@ -187,7 +187,7 @@ impl PyMachine {
     /// Identifies a starting network from a run (thermal::identify); returns the machine and
     /// the summary as JSON text (its `toml` field is the commented file).
     #[staticmethod]
-    #[pyo3(signature = (source, time, names, data, holdout = None, *, axes = None, nodes = None, ambient = None, inputs = None, train_fraction = 0.7, train_rows = None, seed = 0, max_iter = 100))]
+    #[pyo3(signature = (source, time, names, data, holdout = None, *, axes = None, nodes = None, ambient = None, inputs = None, train_fraction = 0.7, train_rows = None, seed = 0, max_iter = 100, progress = None))]
     #[allow(clippy::too_many_arguments)]
     fn identify<'py>(
         py: Python<'py>,
@@ -204,6 +204,7 @@ impl PyMachine {
         train_rows: Option<usize>,
         seed: u64,
         max_iter: usize,
+        progress: Option<Py<PyAny>>,
     ) -> PyResult<(PyMachine, String)> {
         let run = core_run(source, &time, names, &data)?;
         let hold = holdout
@@ -219,9 +220,17 @@ impl PyMachine {
             train_rows,
             seed,
             max_iter,
+            progress: progress.as_ref().map(|_| Arc::new(Progress::new())),
             ..IdentifyOptions::default()
         };
-        let id = crate::detach(py, || identify(&run, hold.as_ref(), &opts))?;
+        let watch = progress.zip(opts.progress.clone());
+        let mut last = None;
+        let tick = move |py: Python<'_>| {
+            if let Some((cb, counts)) = &watch {
+                report_progress(py, cb, counts, &mut last);
+            }
+        };
+        let id = crate::detach_ticking(py, || identify(&run, hold.as_ref(), &opts), tick)?;
         let summary = serde_json::to_string(&id)
             .map_err(|e| PyErrWrap(thermerr_core::Error::Format(e.to_string())))?;
         Ok((

@@ -200,7 +200,21 @@ pub struct IdentifyOptions {
     pub max_nodes: usize,
     pub seed: u64,
     pub max_iter: usize,
+    /// Counts the stages done ([`IDENTIFY_STAGES`]) for a front end's bar.
+    pub progress: Option<std::sync::Arc<crate::progress::Progress>>,
 }
+
+/// The stages of [`identify`] in the order they run, as [`Identification::stage_s`] names them:
+/// the screening of the temperatures (with the suspect readings, the ambient and the lagged
+/// copies), the network's structure (clusters, sources, links and first values), the
+/// calibration of the candidate trees with the checks of the chosen network (an unsensed node,
+/// a sensor's drift, the fit kept), and every axis's drift map with the held-out figures.
+pub const IDENTIFY_STAGES: [&str; 4] = [
+    "screening",
+    "structure",
+    "calibration_and_checks",
+    "drift_maps",
+];
 
 impl Default for IdentifyOptions {
     fn default() -> Self {
@@ -214,6 +228,7 @@ impl Default for IdentifyOptions {
             max_nodes: 5,
             seed: 0,
             max_iter: 100,
+            progress: None,
         }
     }
 }
@@ -292,6 +307,17 @@ pub struct Identification {
     pub unsensed: Option<UnsensedMass>,
     /// The sensor drift tried beside the network (module docs, step 6), kept or not.
     pub sensor_drift: Option<DriftTried>,
+    /// Wall time of each stage ([`IDENTIFY_STAGES`]), s, in the order they ran (written as a
+    /// map in that order).
+    #[serde(serialize_with = "in_order")]
+    pub stage_s: Vec<(&'static str, f64)>,
+}
+
+fn in_order<S: serde::Serializer>(
+    v: &[(&'static str, f64)],
+    s: S,
+) -> std::result::Result<S::Ok, S::Error> {
+    s.collect_map(v.iter().map(|(k, t)| (k, t)))
 }
 
 /// First-order lag with the inputs held over each step: y⁺ = a·y + (1 − a)·p, a = e^{−h/τ}.
@@ -1189,6 +1215,39 @@ fn cluster(
     Ok((labels, own, j / (n as f64 * sep.max(1e-300))))
 }
 
+/// The clock and the counts of [`identify`]'s stages.
+struct Stages<'p> {
+    progress: Option<&'p crate::progress::Progress>,
+    clock: std::time::Instant,
+    last: f64,
+    times: Vec<(&'static str, f64)>,
+}
+
+impl<'p> Stages<'p> {
+    fn start(progress: Option<&'p crate::progress::Progress>) -> Self {
+        crate::progress::plan(progress, IDENTIFY_STAGES.len());
+        crate::progress::stage(progress, 1);
+        Stages {
+            progress,
+            clock: std::time::Instant::now(),
+            last: 0.0,
+            times: Vec::new(),
+        }
+    }
+
+    /// The next stage in [`IDENTIFY_STAGES`] is done.
+    fn done(&mut self) {
+        let k = self.times.len();
+        let now = self.clock.elapsed().as_secs_f64();
+        if let Some(name) = IDENTIFY_STAGES.get(k) {
+            self.times.push((name, now - self.last));
+        }
+        self.last = now;
+        crate::progress::step(self.progress);
+        crate::progress::stage(self.progress, (k + 2).min(IDENTIFY_STAGES.len()));
+    }
+}
+
 /// Identifies a starting network from a run (module docs).
 pub fn identify(
     run: &Run,
@@ -1196,6 +1255,7 @@ pub fn identify(
     opts: &IdentifyOptions,
 ) -> Result<Identification> {
     let file = run.source.clone();
+    let mut stages = Stages::start(opts.progress.as_deref());
     let mut ck = check_input(run, opts)?;
     let as_read = RunView::new(run);
     as_read.one_run()?;
@@ -1554,6 +1614,7 @@ pub fn identify(
         other => other,
     };
 
+    stages.done();
     // 2. clusters
     let ns = sensors.len();
     let stride = m.div_ceil(400).max(1);
@@ -2034,6 +2095,7 @@ pub fn identify(
         starts.push((k, "the rough start", rough));
     }
 
+    stages.done();
     // 7. calibrate: first axis with the network, the others their drift map only
     let cal_opts = CalibrationOptions {
         axis: ck.axes[0].clone(),
@@ -2174,6 +2236,7 @@ pub fn identify(
         s.w = sig4(s.w);
         s.exponent = sig4(s.exponent);
     }
+    stages.done();
     // 8. every axis's drift map for a new run: a run is simulated from its sensors' first
     // readings, so the map is fitted to the node temperatures simulated from there, by ridge
     // regression (the penalty chosen by blocked folds of the training rows). The calibration's
@@ -2376,6 +2439,7 @@ pub fn identify(
             slow.join(", ")
         ));
     }
+    stages.done();
     let mut id = Identification {
         machine,
         toml: String::new(),
@@ -2399,6 +2463,7 @@ pub fn identify(
         network_fit,
         unsensed,
         sensor_drift,
+        stage_s: stages.times,
     };
     id.toml = commented_toml(&id)?;
     // the text must load back to the very machine judged above
