@@ -323,8 +323,14 @@ fn in_order<S: serde::Serializer>(
 /// First-order lag with the inputs held over each step: y⁺ = a·y + (1 − a)·p, a = e^{−h/τ}.
 fn lowpass(t: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
     let mut y = vec![0.0; p.len()];
+    // (step, a) of the last step: a logger's steps repeat, and exp is the loop's cost
+    let mut last = (f64::NAN, 0.0);
     for i in 1..p.len() {
-        let a = portable::exp(-(t[i] - t[i - 1]) / tau);
+        let h = t[i] - t[i - 1];
+        if h.to_bits() != last.0.to_bits() {
+            last = (h, portable::exp(-h / tau));
+        }
+        let a = last.1;
         y[i] = a * y[i - 1] + (1.0 - a) * p[i - 1];
     }
     y
@@ -524,11 +530,33 @@ fn reading_noise(y: &[f64]) -> f64 {
     trimmed.max(quant).max(0.01)
 }
 
+/// The column a copy is sought for and the ambient, with their means (the same for every lag
+/// tried against them).
+struct CopyTarget<'a> {
+    b: &'a [f64],
+    amb: &'a [f64],
+    mb: f64,
+    ma: f64,
+}
+
+impl<'a> CopyTarget<'a> {
+    fn new(b: &'a [f64], amb: &'a [f64]) -> Self {
+        let n = b.len() as f64;
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
+        CopyTarget {
+            b,
+            amb,
+            mb: mean(b),
+            ma: mean(amb),
+        }
+    }
+}
+
 /// Least squares b ≈ c + g·z + h·amb; returns (RMS, g).
-fn copy_fit(z: &[f64], b: &[f64], amb: &[f64]) -> (f64, f64) {
+fn copy_fit(z: &[f64], target: &CopyTarget<'_>) -> (f64, f64) {
+    let CopyTarget { b, amb, mb, ma } = *target;
     let n = b.len() as f64;
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
-    let (mz, mb, ma) = (mean(z), mean(b), mean(amb));
+    let mz = z.iter().sum::<f64>() / n;
     let (mut s11, mut s12, mut s22, mut s1y, mut s2y) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for ((&z, &b), &a) in z.iter().zip(b).zip(amb) {
         let (x1, x2, y) = (z - mz, a - ma, b - mb);
@@ -567,19 +595,20 @@ fn best_copy_fit(
     amb: &[f64],
     noise: f64,
 ) -> (f64, f64, f64) {
-    let fits: Vec<(f64, f64)> = lags.iter().map(|z| copy_fit(z, b, amb)).collect();
+    let target = CopyTarget::new(b, amb);
+    let fits: Vec<(f64, f64)> = lags.iter().map(|z| copy_fit(z, &target)).collect();
     let k = (0..fits.len())
         .min_by(|&i, &j| fits[i].0.total_cmp(&fits[j].0))
         .unwrap_or(0);
     let mut best = (fits[k].0, grid[k], fits[k].1);
     // no lag at all: a duplicate of the column (two sensors side by side, a column logged twice)
-    let same = copy_fit(a, b, amb);
+    let same = copy_fit(a, &target);
     if same.0 < best.0 {
         return (same.0 / noise, 0.0, same.1);
     }
     if best.0 <= 2.0 * COPY_RATIO * noise {
         let at = |tau: f64| {
-            let (r, g) = copy_fit(&lag(t, a, tau), b, amb);
+            let (r, g) = copy_fit(&lag(t, a, tau), &target);
             (r, tau, g)
         };
         let (mut lo, mut hi) = (
