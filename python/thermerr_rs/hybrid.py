@@ -9,6 +9,7 @@ import numpy as np
 
 from . import _core
 from ._arrays import F64, feature_names, series_name
+from .base import _bridged_for_fit
 from .errors import ShapeError
 from .grey import _large_n, _Sequential
 
@@ -82,6 +83,7 @@ class HybridFilterNet(_Sequential):
             raise ShapeError("no runs to fit on")
         for r in runs:
             r.check_fit_columns(target, list(features))
+        runs = [_bridged_for_fit(r, list(features)) for r in runs]
         xs = [r.input_matrix(features, inputs) for r in runs]
         ys = [r[target] for r in runs]
         starts = [int(s) for s in np.cumsum([len(v) for v in ys])[:-1]]

@@ -162,6 +162,47 @@ class Run:
             raise DataError("no columns asked for")
         return np.ascontiguousarray(np.column_stack([self[n] for n in names]))
 
+    def bridged(self, columns: list[str]) -> tuple[Run, list[str]]:
+        """This run with each temperature of ``columns`` whose failing stretches are all short
+        spikes (a jump away that comes back within 600 s: a thermocouple's glitch, a contact
+        loose for a moment) bridged by a straight line in time between the right readings on
+        either side, and a line per column bridged ("T_t8: 1 short spike (11 rows, first at row
+        3001), each back within 600 s"); the run itself and no lines when there is none. The
+        rule is the core's (``Run::bridged``, which ``thermerr init`` uses too); a column that
+        fails for longer is left as read (:meth:`failing`)."""
+        data: F64 | None = None
+        said: list[str] = []
+        for name in columns:
+            if not name.startswith("T_"):
+                continue
+            mended, line, _ = _core.bridge_column(self.source, name, np.ascontiguousarray(self[name]),
+                                                  np.ascontiguousarray(self.time_s))
+            if mended is None or line is None:
+                continue
+            if data is None:
+                data = self._data.copy()
+            data[:, self._index[name]] = mended
+            said.append(line)
+        if data is None:
+            return self, []
+        parts: dict[str, Any] = {"source": self.source, "time_s": self.time_s, "names": self.names, "data": data,
+                                 "ignored": [], "dropped_rows": self.dropped_rows,
+                                 "interpolated": self.interpolated}
+        return Run(parts), said
+
+    def failing(self, columns: list[str]) -> list[str]:
+        """The suspect-reading lines of the temperatures among ``columns`` that the run shows
+        failing beyond a short spike (a jump that does not come back within 600 s, or comes back
+        only after it: an open thermocouple, a sensor dead for hours)."""
+        out = []
+        for name in columns:
+            if name.startswith("T_"):
+                _, _, text = _core.bridge_column(self.source, name, np.ascontiguousarray(self[name]),
+                                                 np.ascontiguousarray(self.time_s))
+                if text is not None:
+                    out.append(text)
+        return out
+
     def check_fit_columns(self, target: str, features: list[str]) -> None:
         """Checks the columns of a fit before anything is computed: the
         target is an error (``E_*``) column and no input is an error column (a model fitted with

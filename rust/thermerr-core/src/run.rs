@@ -60,7 +60,60 @@ pub struct Run {
 /// real runs stay many orders of magnitude below (epoch seconds are ~2e9).
 pub const MAX_ABS_VALUE: f64 = 1e12;
 
+/// A column's short spikes, bridged by [`Run::bridged`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bridge {
+    pub column: String,
+    /// The rows bridged (0-based, half-open), in order.
+    pub rows: Vec<std::ops::Range<usize>>,
+}
+
+impl Bridge {
+    /// "T_t8: 1 short spike (11 rows, first at row 3001), each back within 600 s" (rows 1-based,
+    /// as the run's errors count them).
+    pub fn said(&self) -> String {
+        let count: usize = self.rows.iter().map(|r| r.len()).sum();
+        format!(
+            "{}: {} short spike{} ({count} row{}, first at row {}), each back within {} s",
+            self.column,
+            self.rows.len(),
+            if self.rows.len() == 1 { "" } else { "s" },
+            if count == 1 { "" } else { "s" },
+            self.rows.first().map_or(0, |r| r.start + 1),
+            crate::guard::GAP_FLOOR_S
+        )
+    }
+}
+
 impl Run {
+    /// This run with each of `columns` whose failing stretches are all short spikes
+    /// ([`crate::guard::short_failures`]: a thermocouple's glitch, a contact loose for a moment,
+    /// each back within [`crate::guard::GAP_FLOOR_S`]) bridged by a straight line in time between
+    /// the right readings on either side, with what was bridged; `None` when none of them has
+    /// such spikes. A column that fails for longer, or to the end, is left as read.
+    pub fn bridged(&self, columns: &[&str]) -> Option<(Run, Vec<Bridge>)> {
+        let mut out: Option<(Run, Vec<Bridge>)> = None;
+        for (k, name) in self.names.iter().enumerate() {
+            if !columns.contains(&name.as_str()) {
+                continue;
+            }
+            let Some(rows) = crate::guard::short_failures(&self.columns[k], &self.time_s) else {
+                continue;
+            };
+            let (copy, said) = out.get_or_insert_with(|| (self.clone(), Vec::new()));
+            let col = &mut copy.columns[k];
+            for r in &rows {
+                col[r.clone()].fill(f64::NAN);
+            }
+            interpolate_gaps(&self.time_s, col);
+            said.push(Bridge {
+                column: name.clone(),
+                rows,
+            });
+        }
+        out
+    }
+
     /// Reads a CSV file. Every refusal names the file, and the row/line and column where there is
     /// one.
     pub fn read_csv(path: &Path, nan: NanPolicy) -> Result<Run> {
@@ -851,7 +904,7 @@ fn csv_error(file: &str, bytes: &[u8], e: csv::Error) -> Error {
 
 /// Fills NaN gaps in place, linear in `t`. Returns how many values it filled, or `usize::MAX`
 /// when the column has no value at all.
-pub(crate) fn interpolate_gaps(t: &[f64], v: &mut [f64]) -> usize {
+fn interpolate_gaps(t: &[f64], v: &mut [f64]) -> usize {
     let known: Vec<usize> = (0..v.len()).filter(|&i| !v[i].is_nan()).collect();
     if known.is_empty() {
         return usize::MAX;
@@ -894,6 +947,55 @@ fn lerp(ta: f64, va: f64, tb: f64, vb: f64, t: f64) -> f64 {
 mod tests {
     use super::*;
     use std::io::Write;
+
+    #[test]
+    #[allow(clippy::single_range_in_vec_init)] // a list of row ranges that holds one
+    fn only_the_named_columns_short_spikes_are_bridged_on_a_straight_line() {
+        let n = 400;
+        let time_s: Vec<f64> = (0..n).map(|i| 15.0 * i as f64).collect();
+        let warm: Vec<f64> = time_s
+            .iter()
+            .map(|t| 20.0 + 5.0 * (1.0 - (-t / 3600.0).exp()))
+            .collect();
+        let mut spiky = warm.clone();
+        spiky[200] = 1372.0;
+        spiky[201] = 1372.0;
+        let mut open = warm.clone();
+        for v in &mut open[300..] {
+            *v = -200.0;
+        }
+        let run = Run {
+            source: "r.csv".into(),
+            time_s: time_s.clone(),
+            names: vec!["T_a".into(), "T_b".into(), "T_c".into()],
+            columns: vec![spiky.clone(), open.clone(), spiky.clone()],
+            ignored: Vec::new(),
+            dropped_rows: Vec::new(),
+            interpolated: 0,
+        };
+        // T_c is not asked for, T_b fails to the end: only T_a is bridged
+        let (mended, said) = run.bridged(&["T_a", "T_b"]).unwrap();
+        assert_eq!(
+            said,
+            vec![Bridge {
+                column: "T_a".into(),
+                rows: vec![200..202]
+            }]
+        );
+        assert_eq!(
+            said[0].said(),
+            "T_a: 1 short spike (2 rows, first at row 201), each back within 600 s"
+        );
+        let a = &mended.columns[0];
+        for k in 200..202 {
+            let w = (time_s[k] - time_s[199]) / (time_s[202] - time_s[199]);
+            assert!((a[k] - (warm[199] + w * (warm[202] - warm[199]))).abs() < 1e-12);
+        }
+        assert_eq!(a[..200], warm[..200]);
+        assert_eq!(mended.columns[1], open);
+        assert_eq!(mended.columns[2], spiky);
+        assert!(run.bridged(&["T_b", "T_c_missing"]).is_none());
+    }
 
     fn write(text: &[u8]) -> tempfile_path::TempPath {
         tempfile_path::TempPath::with(text)

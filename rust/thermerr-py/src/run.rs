@@ -139,6 +139,53 @@ fn probe_faults<'py>(
     ))
 }
 
+/// A temperature of a run to fit on: its values with short spikes bridged
+/// (`thermerr_core::run::Run::bridged`) and the line saying so, or, when it fails otherwise (a
+/// jump that does not come back within the short gap, `Suspect::fails`), the suspect reading's
+/// line; None for what does not apply.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+fn bridge_column<'py>(
+    py: Python<'py>,
+    source: &str,
+    name: &str,
+    values: PyReadonlyArray1<'py, f64>,
+    time: PyReadonlyArray1<'py, f64>,
+) -> PyResult<(
+    Option<Bound<'py, numpy::PyArray1<f64>>>,
+    Option<String>,
+    Option<String>,
+)> {
+    let (v, t) = (slice1(&values)?, slice1(&time)?);
+    if v.len() != t.len() {
+        return Err(PyErrWrap(thermerr_core::Error::Shape(format!(
+            "{source}: {name} has {} values for {} times",
+            v.len(),
+            t.len()
+        )))
+        .into());
+    }
+    let one = Run {
+        source: source.to_string(),
+        time_s: t.to_vec(),
+        names: vec![name.to_string()],
+        columns: vec![v.to_vec()],
+        ignored: Vec::new(),
+        dropped_rows: Vec::new(),
+        interpolated: 0,
+    };
+    if let Some((mut mended, bridges)) = one.bridged(&[name]) {
+        let said = bridges.first().map(|b| b.said());
+        let col = mended.columns.pop().unwrap_or_default();
+        return Ok((Some(vec_to_py(py, col)), said, None));
+    }
+    let failing = thermerr_core::guard::suspect_readings(source, &[name], &[v], t)
+        .into_iter()
+        .find(|sp| sp.fails())
+        .map(|sp| sp.text);
+    Ok((None, None, failing))
+}
+
 /// Refuses a held-out run holding a stretch of the training run's rows, or rows taken from its
 /// log in turn (`thermerr_core::run::check_unseen`): each run's clock and the same columns of
 /// each, in one order; one line naming both files and the rows, a `DataError`.
@@ -233,6 +280,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(not_a_number, m)?)?;
     m.add_function(wrap_pyfunction!(delimiter_named, m)?)?;
     m.add_function(wrap_pyfunction!(probe_faults, m)?)?;
+    m.add_function(wrap_pyfunction!(bridge_column, m)?)?;
     m.add_function(wrap_pyfunction!(scores, m)?)?;
     m.add_function(wrap_pyfunction!(shape_series, m)?)?;
     m.add_function(wrap_pyfunction!(check_unseen, m)?)?;

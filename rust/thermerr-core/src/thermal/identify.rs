@@ -1104,44 +1104,28 @@ fn cycles_within_the_hour(t: &[f64], x: &[f64]) -> Option<(f64, f64)> {
     (share > ROOM_FAST_SHARE && fast > ROOM_FAST_NOISE * reading_noise(x)).then_some((fast, share))
 }
 
-/// The run with each temperature whose failing stretches are all short spikes
-/// ([`crate::guard::short_failures`]: a thermocouple's glitch, a loose contact for a moment)
-/// bridged by a straight line in time between the right readings on either side, and a note per
-/// column; `None` when no column has such spikes. Left in, a spike of hundreds of kelvin would
-/// make the column fail ([`failed_columns`]) and lose the network a sensor for a few rows; a
-/// longer or open stretch (a sensor dead for good) still does. Calibration and the diagnosis
-/// read the run as it is and neither fit nor score those rows. With the run, the columns bridged.
+/// The run with each temperature whose failing stretches are all short spikes bridged
+/// ([`Run::bridged`]), the columns bridged, and a note per column. Left in, a spike of hundreds
+/// of kelvin would make the column fail ([`failed_columns`]) and lose the network a sensor for a
+/// few rows; a longer or open stretch (a sensor dead for good) still does. Calibration and the
+/// diagnosis read the run as it is and neither fit nor score those rows.
 fn bridge_spikes(run: &Run, temps: &[&str]) -> (Option<(Run, Vec<String>)>, Vec<String>) {
-    let mut notes = Vec::new();
-    let mut mended: Option<(Run, Vec<String>)> = None;
-    for (k, name) in run.names.iter().enumerate() {
-        if !temps.contains(&name.as_str()) {
-            continue;
-        }
-        let Some(rows) = crate::guard::short_failures(&run.columns[k], &run.time_s) else {
-            continue;
-        };
-        let (copy, names) = mended.get_or_insert_with(|| (run.clone(), Vec::new()));
-        names.push(name.clone());
-        let col = &mut copy.columns[k];
-        for r in &rows {
-            col[r.clone()].fill(f64::NAN);
-        }
-        crate::run::interpolate_gaps(&run.time_s, col);
-        let count: usize = rows.iter().map(|r| r.len()).sum();
-        notes.push(format!(
-            "{name}: {} short spike{} ({count} row{}, first at row {}), each back within {} s: \
-             bridged by a straight line for identification, so it may be the room or a node's \
-             sensor; calibration and the diagnosis, reading the run as it is, neither fit nor \
-             score those rows",
-            rows.len(),
-            if rows.len() == 1 { "" } else { "s" },
-            if count == 1 { "" } else { "s" },
-            rows[0].start + 1,
-            crate::guard::GAP_FLOOR_S
-        ));
-    }
-    (mended, notes)
+    let Some((mended, bridges)) = run.bridged(temps) else {
+        return (None, Vec::new());
+    };
+    let notes = bridges
+        .iter()
+        .map(|b| {
+            format!(
+                "{}: bridged by a straight line for identification, so it may be the room or a \
+                 node's sensor; calibration and the diagnosis, reading the run as it is, neither \
+                 fit nor score those rows",
+                b.said()
+            )
+        })
+        .collect();
+    let names = bridges.into_iter().map(|b| b.column).collect();
+    (Some((mended, names)), notes)
 }
 
 /// The temperatures the run shows failing ([`Suspect::fails`](crate::guard::Suspect::fails)):
