@@ -30,7 +30,6 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from . import __version__, _core
-from .base import _bridged_for_fit
 from .errors import ConvergenceError, NumericalError, SuspectReadingWarning, ThermerrError
 from .metrics import Scores, scores
 from .run import Run, read_run
@@ -310,6 +309,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
         run.check_fit_columns(args.axis, sensors)
         # the run the fit reads (short spikes of its temperatures bridged): the model, its
         # training scores and the guard's limits are learned from it
+        from .base import _bridged_for_fit  # the estimators' module imports scikit-learn
+
         run = _bridged_for_fit(run, sensors)
     for w in seen:
         print(f"thermerr: warning: {w.message}", file=sys.stderr)
