@@ -192,8 +192,9 @@ class Run:
 
     def failing(self, columns: list[str]) -> list[str]:
         """The suspect-reading lines of the temperatures among ``columns`` that the run shows
-        failing beyond a short spike (a jump that does not come back within 600 s, or comes back
-        only after it: an open thermocouple, a sensor dead for hours)."""
+        failing beyond a short spike: a jump that does not come back within 600 s (an open
+        thermocouple, a sensor dead for hours), or one reading in every row (a dead or
+        disconnected sensor)."""
         out = []
         for name in columns:
             if name.startswith("T_"):
