@@ -140,8 +140,9 @@ def test_a_temperature_spike_is_bridged_before_it_is_fitted(example_run1, tmp_pa
     parts = {"time_s": run.time_s, "names": run.names, "ignored": [], "dropped_rows": [], "interpolated": 0}
     spiky = tr.Run({**parts, "source": "spiky.csv", "data": spiked})
     with pytest.warns(SuspectReadingWarning,
-                      match=rf"T_s05: 1 short spike \(1 row, first at row {k + 1}\).*bridged by a straight line for the fit"):
+                      match=rf"T_s05: 1 short spike \(1 row, first at row {k + 1}\).*bridged by a straight line for the fit") as w:
         m = tr.MLR().fit_run(spiky, "E_z", feats)
+    assert w[0].filename == __file__  # the warning points at the caller's fit_run
     line = spiked.copy()
     line[k, j] = np.interp(run.time_s[k], run.time_s[[k - 1, k + 1]], spiked[[k - 1, k + 1], j])
     ref = tr.MLR().fit_run(tr.Run({**parts, "source": "line.csv", "data": line}), "E_z", feats)

@@ -354,9 +354,9 @@ def _bridged_for_fit(run: Any, features: list[str]) -> Any:
     mended, said = run.bridged(features)
     for line in said:
         warnings.warn(f"{run.source}: {line}: bridged by a straight line for the fit", SuspectReadingWarning,
-                      stacklevel=4)
+                      stacklevel=3)
     for text in mended.failing(features):
-        warnings.warn(f"{text} (the fit reads it as it is)", SuspectReadingWarning, stacklevel=4)
+        warnings.warn(f"{text} (the fit reads it as it is)", SuspectReadingWarning, stacklevel=3)
     return mended
 
 
