@@ -112,7 +112,7 @@ use super::machine::{
 use super::sim::{lag, simulate, simulate_nodes, Init, RunView};
 use crate::error::{Error, Result};
 use crate::fcm::FcmParams;
-use crate::linalg::{lstsq_columns, lstsq_columns_many};
+use crate::linalg::lstsq_columns_many;
 use crate::metrics::{pearson, rms_of as rms};
 use crate::portable;
 use crate::run::Run;
@@ -338,16 +338,13 @@ fn lowpass(t: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
 
 /// Least squares without intercept; returns the coefficients and the residual sum of squares.
 fn fit<C: AsRef<[f64]>>(basis: &[C], y: &[f64]) -> Result<(Vec<f64>, f64)> {
-    // the search's building block, thousands of times on a long run: Ctrl-C is seen here
-    crate::interrupt::check()?;
-    let cols: Vec<&[f64]> = basis.iter().map(AsRef::as_ref).collect();
-    let c = lstsq_columns(&cols, y)?;
-    let ssr = misfit(basis, &c, y);
-    Ok((c, ssr))
+    let mut one = fit_many(basis, &[y])?;
+    Ok(one.pop().expect("one fit per series"))
 }
 
 /// [`fit`] of several series on one basis, factorised once: the same numbers as one [`fit`] each.
 fn fit_many<C: AsRef<[f64]>>(basis: &[C], ys: &[&[f64]]) -> Result<Vec<(Vec<f64>, f64)>> {
+    // the search's building block, thousands of times on a long run: Ctrl-C is seen here
     crate::interrupt::check()?;
     let cols: Vec<&[f64]> = basis.iter().map(AsRef::as_ref).collect();
     let cs = lstsq_columns_many(&cols, ys)?;
